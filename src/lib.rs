@@ -1,0 +1,23 @@
+//! StackedLiveLoad: a linear SDOF structure carrying a stack of up to eight
+//! rigid blocks, each free to stick or slide with Coulomb friction on the
+//! body below, under ground acceleration (see `shared/MODEL.md`).
+//!
+//! - [`params`]: the scene and solver settings, validated.
+//! - [`system`]: masses, stiffness, damping and normal forces.
+//! - [`mode`]: stick/slip modes, their reduced dynamics, and the resolution
+//!   of a consistent mode at an instant.
+//! - [`engine`]: RK4 with located events, peaks and energies.
+//! - [`record`]: ground-motion files and driving a simulation through one.
+//! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
+
+pub mod engine;
+pub mod hermite;
+pub mod mode;
+pub mod params;
+pub mod record;
+pub mod sdof;
+pub mod system;
+
+pub use engine::{Excitation, Outputs, SimError, Simulator, Stats};
+pub use params::{Method, ParamError, Params, Settings, MAX_BLOCKS};
+pub use record::{GroundMotion, RecordError};

@@ -1,0 +1,321 @@
+//! Stick/slip modes of the interfaces, the reduced dynamics of a mode, and the
+//! resolution of a consistent mode at an instant.
+//!
+//! In a mode, bodies joined by stuck interfaces form a *cluster* that moves as
+//! one rigid mass: one degree of freedom. Only the cluster holding the
+//! structure feels the spring and damper; every other cluster is driven by
+//! the constant kinetic friction of the slipping interfaces at its ends, so
+//! its absolute acceleration is constant for the whole mode.
+//!
+//! Everything here is written in *absolute* accelerations `A_i = u_i'' + ag`:
+//! the ground acceleration drops out of every force and of every relative
+//! acceleration, so stick/slip decisions never depend on `ag`.
+
+use crate::params::MAX_BODIES;
+use crate::system::System;
+
+/// State of one interface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Contact {
+    /// Relative velocity zero, friction force whatever keeps it so (|F| <= mus N).
+    Stuck,
+    /// Upper body moving in +x relative to the lower one: F = -muk N.
+    SlipForward,
+    /// Upper body moving in -x relative to the lower one: F = +muk N.
+    SlipBackward,
+    /// No friction (mus = 0): F = 0, never sticks, never an event.
+    Free,
+}
+
+impl Contact {
+    /// Sign of the relative velocity in a slipping mode (0 otherwise).
+    pub fn slip_sign(self) -> f64 {
+        match self {
+            Contact::SlipForward => 1.0,
+            Contact::SlipBackward => -1.0,
+            _ => 0.0,
+        }
+    }
+}
+
+/// The contact state of every interface; index j = 1..=n (index 0 unused).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Mode {
+    pub n: usize,
+    pub contact: [Contact; MAX_BODIES],
+}
+
+impl Mode {
+    pub fn all_stuck(sys: &System) -> Mode {
+        let mut contact = [Contact::Free; MAX_BODIES];
+        for (j, c) in contact.iter_mut().enumerate().take(sys.n + 1).skip(1) {
+            if !sys.is_free(j) {
+                *c = Contact::Stuck;
+            }
+        }
+        Mode { n: sys.n, contact }
+    }
+
+    pub fn is_stuck(&self, j: usize) -> bool {
+        self.contact[j] == Contact::Stuck
+    }
+}
+
+/// The reduced dynamics of one mode: clusters, their masses and the
+/// constant forces the slipping interfaces put on them.
+#[derive(Clone, Debug)]
+pub struct Dynamics {
+    pub n_clusters: usize,
+    /// Cluster of each body.
+    pub cluster_of: [usize; MAX_BODIES],
+    /// Lowest and highest body of each cluster.
+    pub bottom: [usize; MAX_BODIES],
+    pub top: [usize; MAX_BODIES],
+    /// Mass of each cluster.
+    pub mass: [f64; MAX_BODIES],
+    /// Constant force on each cluster from the slipping interfaces at its ends.
+    pub slip_load: [f64; MAX_BODIES],
+    /// Friction force of each slipping or free interface (0 for stuck ones).
+    pub slip_force: [f64; MAX_BODIES],
+    /// For a stuck interface j: mass of bodies j..=top of its cluster.
+    pub mass_above: [f64; MAX_BODIES],
+}
+
+impl Dynamics {
+    pub fn new(sys: &System, mode: &Mode) -> Dynamics {
+        let mut d = Dynamics {
+            n_clusters: 0,
+            cluster_of: [0; MAX_BODIES],
+            bottom: [0; MAX_BODIES],
+            top: [0; MAX_BODIES],
+            mass: [0.0; MAX_BODIES],
+            slip_load: [0.0; MAX_BODIES],
+            slip_force: [0.0; MAX_BODIES],
+            mass_above: [0.0; MAX_BODIES],
+        };
+        for i in 0..=sys.n {
+            if i == 0 || !mode.is_stuck(i) {
+                d.n_clusters += 1;
+                d.bottom[d.n_clusters - 1] = i;
+            }
+            let c = d.n_clusters - 1;
+            d.cluster_of[i] = c;
+            d.top[c] = i;
+            d.mass[c] += sys.mass[i];
+        }
+        for j in 1..=sys.n {
+            let f = -sys.muk[j] * sys.normal[j] * mode.contact[j].slip_sign();
+            d.slip_force[j] = f;
+            if !mode.is_stuck(j) {
+                d.slip_load[d.cluster_of[j]] += f;
+                d.slip_load[d.cluster_of[j - 1]] -= f;
+            }
+        }
+        for c in 0..d.n_clusters {
+            let mut above = 0.0;
+            for j in (d.bottom[c]..=d.top[c]).rev() {
+                above += sys.mass[j];
+                d.mass_above[j] = above;
+            }
+        }
+        d
+    }
+
+    /// Force of the spring, the damper and `fext` on the structure.
+    #[inline]
+    pub fn structure_load(sys: &System, u0: f64, v0: f64, fext: f64) -> f64 {
+        fext - sys.k * u0 - sys.c * v0
+    }
+
+    /// Absolute acceleration of cluster `c`; `load0` is the structure load
+    /// (used only by cluster 0).
+    #[inline]
+    pub fn accel(&self, c: usize, load0: f64) -> f64 {
+        let extra = if c == 0 { load0 } else { 0.0 };
+        (self.slip_load[c] + extra) / self.mass[c]
+    }
+
+    /// Friction force of interface j (force of body j-1 on body j).
+    pub fn force(&self, j: usize, mode: &Mode, load0: f64) -> f64 {
+        if mode.is_stuck(j) {
+            // Bodies j..=top move with the cluster: F_j = M_above A + F_{top+1}.
+            let c = self.cluster_of[j];
+            let above = self.top[c] + 1;
+            let f_top = if above <= mode.n {
+                self.slip_force[above]
+            } else {
+                0.0
+            };
+            self.mass_above[j] * self.accel(c, load0) + f_top
+        } else {
+            self.slip_force[j]
+        }
+    }
+
+    /// Relative absolute acceleration of interface j (body j minus body j-1).
+    pub fn rel_accel(&self, j: usize, load0: f64) -> f64 {
+        self.accel(self.cluster_of[j], load0) - self.accel(self.cluster_of[j - 1], load0)
+    }
+}
+
+/// Numerical slack of the consistency checks, relative to the natural scale
+/// of each quantity (`mus N` for forces, `g` for accelerations).
+pub const CONSISTENCY_TOL: f64 = 1e-10;
+
+/// Largest violation of the contact law by `mode` at an instant, among the
+/// interfaces in `zero` (bit j set: relative velocity exactly zero). Zero
+/// or negative means consistent.
+pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
+    let d = Dynamics::new(sys, mode);
+    let mut worst = f64::NEG_INFINITY;
+    for j in 1..=sys.n {
+        if zero & (1 << j) == 0 {
+            continue;
+        }
+        let v = match mode.contact[j] {
+            Contact::Stuck => {
+                let limit = sys.mus[j] * sys.normal[j];
+                (d.force(j, mode, load0).abs() - limit) / limit
+            }
+            Contact::SlipForward | Contact::SlipBackward => {
+                -mode.contact[j].slip_sign() * d.rel_accel(j, load0) / sys.g
+            }
+            Contact::Free => f64::NEG_INFINITY,
+        };
+        worst = worst.max(v);
+    }
+    worst
+}
+
+/// What the resolution is asked to decide.
+#[derive(Clone, Copy, Debug)]
+pub struct ResolveRequest {
+    /// Current mode; the contacts of interfaces not in `zero` are kept.
+    pub mode: Mode,
+    /// Interfaces with zero relative velocity (bit j), free ones excluded.
+    pub zero: u32,
+    /// Interfaces whose stick force has just reached `mus N`: they may not stay stuck.
+    pub must_break: u32,
+    /// Interfaces that were stuck before this instant (preferred to stay so).
+    pub was_stuck: u32,
+    /// Structure load (spring, damper, external force) at this instant.
+    pub load0: f64,
+}
+
+/// Outcome of a resolution.
+#[derive(Clone, Copy, Debug)]
+pub struct Resolved {
+    pub mode: Mode,
+    /// False when no assignment satisfied the contact law within
+    /// [`CONSISTENCY_TOL`] and the least violating one was taken.
+    pub consistent: bool,
+}
+
+/// Finds a consistent mode: every interface in `zero` is stuck, or starts
+/// slipping in a direction its relative acceleration agrees with.
+///
+/// Selection rule (needed when mus > muk, where several assignments can be
+/// consistent; for mus = muk the consistent assignment is unique):
+/// 1. interfaces in `must_break` do not stay stuck (unless nothing else is consistent);
+/// 2. the largest number of stuck interfaces wins;
+/// 3. then the largest number of interfaces that were stuck before;
+/// 4. then the first in enumeration order, which prefers sticking lower
+///    interfaces and slipping forward.
+///
+/// The search goes from the largest stick set down and stops at the first
+/// size with a consistent assignment, so the common case costs one check.
+pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
+    let mut zero_list = [0usize; MAX_BODIES];
+    let mut k = 0;
+    for j in 1..=sys.n {
+        if req.zero & (1 << j) != 0 && !sys.is_free(j) {
+            zero_list[k] = j;
+            k += 1;
+        }
+    }
+    let zero = &zero_list[..k];
+    let mut fallback: Option<(f64, Mode)> = None;
+    for allow_breaking in [false, true] {
+        for size in (0..=k).rev() {
+            let mut best: Option<(u32, Mode)> = None;
+            for stuck_bits in 0u32..(1 << k) {
+                if stuck_bits.count_ones() as usize != size {
+                    continue;
+                }
+                let stuck_ifaces = bits_to_ifaces(stuck_bits, zero);
+                if !allow_breaking && stuck_ifaces & req.must_break != 0 {
+                    continue;
+                }
+                let kept = (stuck_ifaces & req.was_stuck).count_ones();
+                if best.is_some_and(|(b, _)| b >= kept) {
+                    continue;
+                }
+                let n_slip = k - size;
+                for signs in 0u32..(1 << n_slip) {
+                    let mut mode = req.mode;
+                    let mut s = 0;
+                    for (bit, &j) in zero.iter().enumerate() {
+                        mode.contact[j] = if stuck_bits & (1 << bit) != 0 {
+                            Contact::Stuck
+                        } else {
+                            s += 1;
+                            if signs & (1 << (s - 1)) == 0 {
+                                Contact::SlipForward
+                            } else {
+                                Contact::SlipBackward
+                            }
+                        };
+                    }
+                    let v = violation(sys, &mode, req.zero, req.load0);
+                    if v <= CONSISTENCY_TOL {
+                        best = Some((kept, mode));
+                        break;
+                    }
+                    if fallback.is_none_or(|(fv, _)| v < fv) {
+                        fallback = Some((v, mode));
+                    }
+                }
+            }
+            if let Some((_, mode)) = best {
+                return Resolved {
+                    mode,
+                    consistent: true,
+                };
+            }
+        }
+    }
+    Resolved {
+        mode: fallback.map_or(req.mode, |(_, m)| m),
+        consistent: false,
+    }
+}
+
+/// Maps bit b of `bits` to interface `list[b]` as a bit mask over interfaces.
+fn bits_to_ifaces(bits: u32, list: &[usize]) -> u32 {
+    list.iter()
+        .enumerate()
+        .filter(|(b, _)| bits & (1 << b) != 0)
+        .fold(0, |acc, (_, &j)| acc | (1 << j))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::Params;
+
+    #[test]
+    fn clusters_follow_the_stuck_interfaces() {
+        let mut p = Params::default();
+        p.n_blocks = 3;
+        let sys = System::new(&p).unwrap();
+        let mut mode = Mode::all_stuck(&sys);
+        mode.contact[2] = Contact::SlipForward;
+        let d = Dynamics::new(&sys, &mode);
+        assert_eq!(d.n_clusters, 2);
+        assert_eq!(d.cluster_of[..4], [0, 0, 1, 1]);
+        // Cluster 1 (blocks 2, 3) is pushed back by friction muk2 N2.
+        let expected = -sys.muk[2] * sys.normal[2];
+        assert_eq!(d.slip_load[1], expected);
+        assert_eq!(d.slip_load[0], -expected);
+    }
+}

@@ -1,0 +1,189 @@
+//! User-facing parameters of a scene and of the solver, with validation.
+
+use std::fmt;
+
+/// Largest stack height supported (blocks above the structure).
+pub const MAX_BLOCKS: usize = 8;
+/// Bodies: the structure (index 0) and up to `MAX_BLOCKS` blocks.
+pub const MAX_BODIES: usize = MAX_BLOCKS + 1;
+
+/// Physical description of a scene, in the paper's terms (see `shared/MODEL.md`).
+///
+/// Arrays are indexed by block / interface number minus one: `alpha[0]` is
+/// block 1, `mus[0]` the interface between the structure and block 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    /// Number of blocks in the stack, 0..=`MAX_BLOCKS`.
+    pub n_blocks: usize,
+    /// Mass of the primary structure (kg).
+    pub mp: f64,
+    /// Period of the bare structure (s).
+    pub tp: f64,
+    /// Damping ratio of the bare structure.
+    pub zeta: f64,
+    /// Gravitational acceleration (m/s^2).
+    pub g: f64,
+    /// Mass ratio of block j to the structure, `m_j / mp`.
+    pub alpha: [f64; MAX_BLOCKS],
+    /// Static friction coefficient of interface j (below block j).
+    pub mus: [f64; MAX_BLOCKS],
+    /// Kinetic friction coefficient of interface j.
+    pub muk: [f64; MAX_BLOCKS],
+}
+
+impl Default for Params {
+    /// The paper's Fig. 5a scene: Tp 0.5 s, 5 % damping, alpha 0.25 + 0.25,
+    /// mu_1 = 0.1, mu_2 = 0.05 (static = kinetic), on a 1000 kg structure.
+    fn default() -> Self {
+        let mut alpha = [0.25; MAX_BLOCKS];
+        let mut mu = [0.1; MAX_BLOCKS];
+        alpha[1] = 0.25;
+        mu[1] = 0.05;
+        Params {
+            n_blocks: 2,
+            mp: 1000.0,
+            tp: 0.5,
+            zeta: 0.05,
+            g: 9.81,
+            alpha,
+            mus: mu,
+            muk: mu,
+        }
+    }
+}
+
+/// A parameter outside its allowed range. `field` is the variable's public
+/// name (as in the FMU, e.g. `alpha[2]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamError {
+    pub field: String,
+    pub value: f64,
+    pub allowed: &'static str,
+}
+
+impl fmt::Display for ParamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} = {} is not allowed: it must be {}",
+            self.field, self.value, self.allowed
+        )
+    }
+}
+
+impl std::error::Error for ParamError {}
+
+fn check(field: &str, value: f64, ok: bool, allowed: &'static str) -> Result<(), ParamError> {
+    if ok && value.is_finite() {
+        Ok(())
+    } else {
+        Err(ParamError {
+            field: field.to_string(),
+            value,
+            allowed,
+        })
+    }
+}
+
+impl Params {
+    /// Checks every field; the first one out of range is reported.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        if self.n_blocks > MAX_BLOCKS {
+            return Err(ParamError {
+                field: "nBlocks".into(),
+                value: self.n_blocks as f64,
+                allowed: "an integer from 0 to 8",
+            });
+        }
+        check("mp", self.mp, self.mp > 0.0, "finite and > 0")?;
+        check("Tp", self.tp, self.tp > 0.0, "finite and > 0")?;
+        check(
+            "zeta",
+            self.zeta,
+            (0.0..1.0).contains(&self.zeta),
+            "finite, >= 0 and < 1",
+        )?;
+        check("g", self.g, self.g > 0.0, "finite and > 0")?;
+        for j in 0..self.n_blocks {
+            let name = |s: &str| format!("{}[{}]", s, j + 1);
+            check(&name("alpha"), self.alpha[j], self.alpha[j] > 0.0, "finite and > 0")?;
+            check(&name("mus"), self.mus[j], self.mus[j] >= 0.0, "finite and >= 0")?;
+            check(
+                &name("muk"),
+                self.muk[j],
+                self.muk[j] >= 0.0 && self.muk[j] <= self.mus[j],
+                "finite, >= 0 and <= mus of the same interface",
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// How mode switches are handled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Guards are root-found inside each RK4 step and the mode switches at the
+    /// located instant (4th order through switches). The default.
+    EventLocated,
+    /// Guards are checked only at internal step ends, as in the paper
+    /// (first order at every switch). A baseline for comparisons.
+    StepEnd,
+}
+
+/// Solver settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub method: Method,
+    /// Largest internal step (s). 0 selects the automatic accuracy bound
+    /// (see [`crate::engine::auto_step`]); a positive value replaces it, but
+    /// the RK4 stability bound of the bare structure always applies.
+    pub max_step: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            method: Method::EventLocated,
+            max_step: 0.0,
+        }
+    }
+}
+
+impl Settings {
+    pub fn validate(&self) -> Result<(), ParamError> {
+        check(
+            "maxStep",
+            self.max_step,
+            self.max_step >= 0.0,
+            "finite and >= 0 (0 = automatic)",
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_bad_fields_are_named() {
+        assert!(Params::default().validate().is_ok());
+        let mut p = Params::default();
+        p.alpha[1] = -1.0;
+        assert_eq!(p.validate().unwrap_err().field, "alpha[2]");
+        let mut p = Params::default();
+        p.muk[0] = 0.2;
+        let e = p.validate().unwrap_err();
+        assert_eq!(e.field, "muk[1]");
+        assert!(e.to_string().contains("<= mus"));
+        let mut p = Params::default();
+        p.zeta = f64::NAN;
+        assert_eq!(p.validate().unwrap_err().field, "zeta");
+        let mut p = Params::default();
+        p.n_blocks = 9;
+        assert_eq!(p.validate().unwrap_err().field, "nBlocks");
+        // Entries beyond nBlocks are not used and not checked.
+        let mut p = Params::default();
+        p.alpha[5] = -3.0;
+        assert!(p.validate().is_ok());
+    }
+}

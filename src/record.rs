@@ -1,0 +1,277 @@
+//! Ground-motion records: PEER `.AT2` files (units of g) and two-column CSV
+//! `time,accel` tables (m/s^2), and driving a simulator through one.
+//!
+//! A record is a table of samples; between samples the acceleration is
+//! linear, before the first and after the last it is zero. An `.AT2` file's
+//! first value is at t = 0 and the n-th at n DT.
+
+use crate::engine::{Excitation, SimError, Simulator};
+use std::fmt;
+use std::path::Path;
+
+/// A tabulated ground acceleration (m/s^2) at increasing times (s).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroundMotion {
+    pub time: Vec<f64>,
+    pub accel: Vec<f64>,
+}
+
+/// A record that could not be read: which file, which line, what was wrong.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordError {
+    pub file: String,
+    /// 1-based line number, 0 when the problem is not on one line.
+    pub line: usize,
+    pub message: String,
+}
+
+impl fmt::Display for RecordError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line > 0 {
+            write!(f, "{}:{}: {}", self.file, self.line, self.message)
+        } else {
+            write!(f, "{}: {}", self.file, self.message)
+        }
+    }
+}
+
+impl std::error::Error for RecordError {}
+
+impl GroundMotion {
+    /// Samples every `dt` from t = 0.
+    pub fn uniform(dt: f64, accel: Vec<f64>) -> GroundMotion {
+        let time = (0..accel.len()).map(|i| i as f64 * dt).collect();
+        GroundMotion { time, accel }
+    }
+
+    /// Reads a `.AT2` (by extension, case-insensitive) or CSV file; AT2
+    /// values are converted from g to m/s^2 with `g`.
+    pub fn read(path: &Path, g: f64) -> Result<GroundMotion, RecordError> {
+        let name = path.display().to_string();
+        let bytes = std::fs::read(path).map_err(|e| RecordError {
+            file: name.clone(),
+            line: 0,
+            message: format!("cannot read the file: {e}"),
+        })?;
+        let text = String::from_utf8_lossy(&bytes);
+        let is_at2 = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("at2"));
+        if is_at2 {
+            parse_at2(&text, &name, g)
+        } else {
+            parse_csv(&text, &name)
+        }
+    }
+
+    /// Duration covered by the samples (time of the last one).
+    pub fn duration(&self) -> f64 {
+        self.time.last().copied().unwrap_or(0.0)
+    }
+
+    /// Largest absolute acceleration.
+    pub fn pga(&self) -> f64 {
+        self.accel.iter().fold(0.0, |m, a| m.max(a.abs()))
+    }
+
+    /// The linear piece that holds at `t` (looking forward): its value at
+    /// `t`, its slope, and where it ends (the next sample, or infinity).
+    pub fn piece_at(&self, t: f64) -> (f64, f64, f64) {
+        let n = self.time.len();
+        // Index of the first sample strictly after t.
+        let i = self.time.partition_point(|&x| x <= t);
+        if i == 0 {
+            let end = self.time.first().copied().unwrap_or(f64::INFINITY);
+            return (0.0, 0.0, end);
+        }
+        if i >= n {
+            return (0.0, 0.0, f64::INFINITY);
+        }
+        let (t0, t1) = (self.time[i - 1], self.time[i]);
+        let slope = (self.accel[i] - self.accel[i - 1]) / (t1 - t0);
+        (self.accel[i - 1] + slope * (t - t0), slope, t1)
+    }
+}
+
+fn err(file: &str, line: usize, message: impl Into<String>) -> RecordError {
+    RecordError {
+        file: file.to_string(),
+        line,
+        message: message.into(),
+    }
+}
+
+/// Lines split at LF, with every CR dropped (CRLF and CR CR LF files).
+fn lines(text: &str) -> impl Iterator<Item = (usize, String)> + '_ {
+    text.split('\n')
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.replace('\r', " ")))
+}
+
+fn number_after(upper: &str, key: &str) -> Option<f64> {
+    let rest = &upper[upper.find(key)? + key.len()..];
+    let rest = rest.trim_start().strip_prefix('=')?.trim_start();
+    let end = rest
+        .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'E')))
+        .unwrap_or(rest.len());
+    rest[..end].parse().ok()
+}
+
+/// Reads NPTS and DT from header line 4, in either PEER form:
+/// `NPTS=  5435, DT=  .0100 SEC` or `5435   .0100   NPTS, DT`.
+fn npts_dt(line: &str) -> Option<(usize, f64)> {
+    let upper = line.to_ascii_uppercase();
+    if let (Some(n), Some(dt)) = (number_after(&upper, "NPTS"), number_after(&upper, "DT")) {
+        return Some((n as usize, dt));
+    }
+    let mut nums = upper
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter_map(|t| t.parse::<f64>().ok());
+    let (n, dt) = (nums.next()?, nums.next()?);
+    (n.fract() == 0.0).then_some((n as usize, dt))
+}
+
+fn parse_at2(text: &str, file: &str, g: f64) -> Result<GroundMotion, RecordError> {
+    let mut npts_dt_found = None;
+    let mut values = Vec::new();
+    for (no, line) in lines(text) {
+        if no < 4 {
+            continue;
+        }
+        if no == 4 {
+            let (n, dt) = npts_dt(&line).ok_or_else(|| {
+                err(file, 4, format!("expected NPTS and DT in header line 4, found `{}`", line.trim()))
+            })?;
+            if !(dt > 0.0 && dt.is_finite()) || n == 0 {
+                return Err(err(file, 4, format!("NPTS = {n} and DT = {dt} must be positive")));
+            }
+            values.reserve(n);
+            npts_dt_found = Some((n, dt));
+            continue;
+        }
+        for token in line.split_whitespace() {
+            let v: f64 = token.parse().map_err(|_| {
+                err(file, no, format!("expected a number, found `{token}`"))
+            })?;
+            if !v.is_finite() {
+                return Err(err(file, no, format!("value `{token}` is not finite")));
+            }
+            values.push(v * g);
+        }
+    }
+    let (n, dt) = npts_dt_found.ok_or_else(|| err(file, 0, "the file has fewer than 4 header lines"))?;
+    if values.len() != n {
+        return Err(err(
+            file,
+            0,
+            format!("header line 4 says NPTS = {n} but the file holds {} values", values.len()),
+        ));
+    }
+    Ok(GroundMotion::uniform(dt, values))
+}
+
+fn parse_csv(text: &str, file: &str) -> Result<GroundMotion, RecordError> {
+    let (mut time, mut accel) = (Vec::new(), Vec::new());
+    for (no, line) in lines(text) {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let parsed: Option<Vec<f64>> = fields.iter().map(|f| f.parse().ok()).collect();
+        let row = match parsed {
+            Some(r) if r.len() == 2 => r,
+            None if time.is_empty() && fields.len() == 2 => continue, // header line
+            _ => {
+                return Err(err(
+                    file,
+                    no,
+                    format!("expected two numbers `time,accel`, found `{line}`"),
+                ))
+            }
+        };
+        if !row.iter().all(|x| x.is_finite()) {
+            return Err(err(file, no, "values must be finite"));
+        }
+        if let Some(&last) = time.last() {
+            if row[0] <= last {
+                return Err(err(
+                    file,
+                    no,
+                    format!("time {} does not increase (previous {last})", row[0]),
+                ));
+            }
+        }
+        time.push(row[0]);
+        accel.push(row[1]);
+    }
+    if time.len() < 2 {
+        return Err(err(file, 0, "a record needs at least two samples `time,accel`"));
+    }
+    Ok(GroundMotion { time, accel })
+}
+
+/// Drives `sim` from its current time to `t_end` under `scale * record`
+/// plus `extra` (linear from the current time), splitting at every sample
+/// so that each piece is linear.
+pub fn advance_with_record(
+    sim: &mut Simulator,
+    t_end: f64,
+    record: &GroundMotion,
+    scale: f64,
+    extra: &Excitation,
+) -> Result<(), SimError> {
+    let t_start = sim.time();
+    loop {
+        let t = sim.time();
+        let (a, slope, piece_end) = record.piece_at(t);
+        let t1 = piece_end.min(t_end);
+        let dt = t - t_start;
+        let exc = Excitation {
+            ag: scale * a + extra.ag + extra.ag_rate * dt,
+            ag_rate: scale * slope + extra.ag_rate,
+            fext: extra.fext + extra.fext_rate * dt,
+            fext_rate: extra.fext_rate,
+        };
+        sim.advance(t1, &exc)?;
+        if t1 >= t_end {
+            return Ok(());
+        }
+    }
+}
+
+/// Runs a whole record from the simulator's current time to the record's end.
+pub fn run(sim: &mut Simulator, record: &GroundMotion, scale: f64) -> Result<(), SimError> {
+    advance_with_record(sim, record.duration(), record, scale, &Excitation::default())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_both_header_forms_and_counts_values() {
+        let a = "t\nt\nt\nNPTS=    3, DT=   .0100 SEC,\r\n  .1E+00 -.2E+00\r\n .3\r\n";
+        let gm = parse_at2(a, "a", 10.0).unwrap();
+        assert_eq!(gm.accel, vec![1.0, -2.0, 3.0]);
+        assert_eq!(gm.time[2], 0.02);
+        let b = "t\r\r\nt\r\r\nt\r\r\n   3    0.0200    NPTS, DT\r\r\n1 2 3\r\r\n";
+        assert_eq!(parse_at2(b, "b", 1.0).unwrap().time[1], 0.02);
+        let c = "t\nt\nt\nNPTS =   3 , DT =   .020 SEC ,\n1 2\n";
+        let e = parse_at2(c, "c.AT2", 1.0).unwrap_err();
+        assert!(e.to_string().contains("NPTS = 3 but the file holds 2"));
+        let d = "t\nt\nt\nNPTS= 2, DT= .01\n1 x\n";
+        assert_eq!(parse_at2(d, "d", 1.0).unwrap_err().line, 5);
+    }
+
+    #[test]
+    fn csv_with_and_without_header() {
+        let gm = parse_csv("time,accel\n0,1\n0.5,2\n", "x").unwrap();
+        assert_eq!(gm.accel, vec![1.0, 2.0]);
+        assert_eq!(gm.piece_at(0.25), (1.5, 2.0, 0.5));
+        assert_eq!(gm.piece_at(0.5), (0.0, 0.0, f64::INFINITY));
+        let e = parse_csv("0,1\n0.5\n", "y.csv").unwrap_err();
+        assert_eq!((e.line, e.file.as_str()), (2, "y.csv"));
+        assert_eq!(parse_csv("0,1\n0,2\n", "z").unwrap_err().line, 2);
+    }
+}

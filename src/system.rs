@@ -1,0 +1,67 @@
+//! Physical constants derived from validated [`Params`]: masses, stiffness,
+//! damping and the normal force of every interface.
+
+use crate::params::{ParamError, Params, MAX_BODIES};
+use std::f64::consts::PI;
+
+/// Body 0 is the structure; bodies 1..=n are blocks. Interface arrays are
+/// indexed by interface number j = 1..=n (index 0 unused): interface j lies
+/// between body j-1 and body j.
+#[derive(Clone, Debug)]
+pub struct System {
+    pub n: usize,
+    pub mass: [f64; MAX_BODIES],
+    pub k: f64,
+    pub c: f64,
+    pub g: f64,
+    /// Normal force of interface j: g times the mass of blocks j..=n.
+    pub normal: [f64; MAX_BODIES],
+    pub mus: [f64; MAX_BODIES],
+    pub muk: [f64; MAX_BODIES],
+    /// Circular frequency of the bare structure, sqrt(k / mp).
+    pub omega_p: f64,
+}
+
+impl System {
+    pub fn new(p: &Params) -> Result<System, ParamError> {
+        p.validate()?;
+        let n = p.n_blocks;
+        let omega_p = 2.0 * PI / p.tp;
+        let k = p.mp * omega_p * omega_p;
+        let mut mass = [0.0; MAX_BODIES];
+        let mut mus = [0.0; MAX_BODIES];
+        let mut muk = [0.0; MAX_BODIES];
+        mass[0] = p.mp;
+        for j in 1..=n {
+            mass[j] = p.alpha[j - 1] * p.mp;
+            mus[j] = p.mus[j - 1];
+            muk[j] = p.muk[j - 1];
+        }
+        let mut normal = [0.0; MAX_BODIES];
+        let mut above = 0.0;
+        for j in (1..=n).rev() {
+            above += mass[j];
+            normal[j] = p.g * above;
+        }
+        Ok(System {
+            n,
+            mass,
+            k,
+            c: 2.0 * p.zeta * (k * p.mp).sqrt(),
+            g: p.g,
+            normal,
+            mus,
+            muk,
+            omega_p,
+        })
+    }
+
+    /// An interface with no static friction transmits no force and never sticks.
+    pub fn is_free(&self, j: usize) -> bool {
+        self.mus[j] == 0.0
+    }
+
+    pub fn total_mass(&self) -> f64 {
+        self.mass[..=self.n].iter().sum()
+    }
+}
