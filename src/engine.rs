@@ -179,7 +179,8 @@ impl Segment<'_> {
 
     fn rk4(&self, y0: &Vector, t0: f64, h: f64) -> Vector {
         let n = self.len;
-        let (mut k1, mut k2, mut k3, mut k4) = ([0.0; STATE], [0.0; STATE], [0.0; STATE], [0.0; STATE]);
+        let (mut k1, mut k2, mut k3, mut k4) =
+            ([0.0; STATE], [0.0; STATE], [0.0; STATE], [0.0; STATE]);
         let mut tmp = *y0;
         self.deriv(t0, y0, &mut k1);
         for i in 0..n {
@@ -380,7 +381,8 @@ impl Simulator {
 
     /// Whether the current mode satisfies the contact law (within tolerance).
     pub fn mode_is_consistent(&self) -> bool {
-        mode::violation(&self.sys, &self.mode, self.zero_mask(), self.load0()) <= mode::CONSISTENCY_TOL
+        mode::violation(&self.sys, &self.mode, self.zero_mask(), self.load0())
+            <= mode::CONSISTENCY_TOL
     }
 
     /// Advances to `t_end` under an excitation that is linear over
@@ -398,10 +400,7 @@ impl Simulator {
             }
         }
         if t_end < self.t {
-            return Err(SimError::BadTime {
-                now: self.t,
-                t_end,
-            });
+            return Err(SimError::BadTime { now: self.t, t_end });
         }
         let t_ref = self.t;
         if exc.fext != self.fext_now {
@@ -526,7 +525,8 @@ impl Simulator {
         let load0 = Dynamics::structure_load(&self.sys, self.u[0], self.v[0], fext);
         let a = self.dynamics.accel(0, load0);
         let rel_acc = a - ag;
-        let jerk = (exc.fext_rate - self.sys.k * self.v[0] - self.sys.c * rel_acc) / self.dynamics.mass[0];
+        let jerk =
+            (exc.fext_rate - self.sys.k * self.v[0] - self.sys.c * rel_acc) / self.dynamics.mass[0];
         (a, jerk)
     }
 
@@ -615,13 +615,20 @@ impl Simulator {
         g
     }
 
-    /// Fires every guard (among `candidates`) that is negative now.
-    fn fire_violated(&mut self, exc: &Excitation, t_ref: f64, candidates: u32, strict: bool) -> bool {
+    /// Fires the guards in `forced` and every guard among `candidates`
+    /// that is zero or negative now.
+    fn fire_violated(
+        &mut self,
+        exc: &Excitation,
+        t_ref: f64,
+        candidates: u32,
+        forced: u32,
+    ) -> bool {
         let g = self.guards_now(exc, t_ref);
         let (mut slip_zeroed, mut must_break) = (0, 0);
         for j in 1..=self.sys.n {
-            let hit = if strict { g[j] < 0.0 } else { g[j] <= 0.0 };
-            if candidates & (1 << j) != 0 && hit {
+            let hit = forced & (1 << j) != 0 || (candidates & (1 << j) != 0 && g[j] <= 0.0);
+            if hit {
                 match self.mode.contact[j] {
                     Contact::Stuck => must_break |= 1 << j,
                     Contact::SlipForward | Contact::SlipBackward => slip_zeroed |= 1 << j,
@@ -649,7 +656,7 @@ impl Simulator {
             let (y1, earliest) = {
                 let seg = self.segment(exc, t_ref);
                 let y1 = seg.rk4(&y0, t0, h);
-                let mut earliest: Option<f64> = None;
+                let mut earliest: Option<(f64, usize)> = None;
                 for j in 1..=self.sys.n {
                     if muted & (1 << j) != 0 || self.sys.is_free(j) {
                         continue;
@@ -672,7 +679,9 @@ impl Simulator {
                     match start {
                         Some(a) => {
                             let th = seg.locate(j, &y0, t0, h, [a, (1.0, g1)]);
-                            earliest = Some(earliest.map_or(th, |e: f64| e.min(th)));
+                            if earliest.is_none_or(|(e, _)| th < e) {
+                                earliest = Some((th, j));
+                            }
                         }
                         None => muted |= 1 << j, // violated at once: chatter guard
                     }
@@ -683,12 +692,16 @@ impl Simulator {
                 None => {
                     self.accept(&y0, &y1, t0, h, exc, t_ref);
                 }
-                Some(theta) => {
-                    let te = if theta >= 1.0 { t1 } else { t0 + theta * h };
-                    let ye = self.segment(exc, t_ref).rk4(&y0, t0, te - t0);
-                    self.accept(&y0, &ye, t0, te - t0, exc, t_ref);
-                    self.t = te;
-                    self.fire_violated(exc, t_ref, all & !muted, false);
+                Some((theta, located)) => {
+                    // The located guard fires whatever its sign after
+                    // rounding; others fire if they have reached zero too.
+                    let h_event = theta * h;
+                    let ye = self.segment(exc, t_ref).rk4(&y0, t0, h_event);
+                    self.accept(&y0, &ye, t0, h_event, exc, t_ref);
+                    if theta >= 1.0 {
+                        self.t = t1;
+                    }
+                    self.fire_violated(exc, t_ref, all & !muted, 1 << located);
                     events += 1;
                     if events >= MAX_EVENTS_PER_STEP {
                         muted = all;
@@ -698,7 +711,7 @@ impl Simulator {
         }
         if muted != 0 {
             self.stats.muted += u64::from(muted.count_ones());
-            self.fire_violated(exc, t_ref, muted, true);
+            self.fire_violated(exc, t_ref, muted, 0);
         }
     }
 
@@ -710,7 +723,7 @@ impl Simulator {
         self.accept(&y0, &y1, t0, t1 - t0, exc, t_ref);
         self.t = t1;
         let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
-        self.fire_violated(exc, t_ref, all, true);
+        self.fire_violated(exc, t_ref, all, 0);
     }
 
     /// All reported quantities at the current time.
@@ -732,7 +745,9 @@ impl Simulator {
             n_events: self.stats.events,
             ..Outputs::default()
         };
-        o.e_kinetic = (0..=s.n).map(|i| 0.5 * s.mass[i] * self.v[i] * self.v[i]).sum();
+        o.e_kinetic = (0..=s.n)
+            .map(|i| 0.5 * s.mass[i] * self.v[i] * self.v[i])
+            .sum();
         for j in 1..=s.n {
             let b = j - 1;
             o.ub[b] = self.u[j];

@@ -106,8 +106,18 @@ impl Params {
         check("g", self.g, self.g > 0.0, "finite and > 0")?;
         for j in 0..self.n_blocks {
             let name = |s: &str| format!("{}[{}]", s, j + 1);
-            check(&name("alpha"), self.alpha[j], self.alpha[j] > 0.0, "finite and > 0")?;
-            check(&name("mus"), self.mus[j], self.mus[j] >= 0.0, "finite and >= 0")?;
+            check(
+                &name("alpha"),
+                self.alpha[j],
+                self.alpha[j] > 0.0,
+                "finite and > 0",
+            )?;
+            check(
+                &name("mus"),
+                self.mus[j],
+                self.mus[j] >= 0.0,
+                "finite and >= 0",
+            )?;
             check(
                 &name("muk"),
                 self.muk[j],

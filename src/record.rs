@@ -140,31 +140,46 @@ fn parse_at2(text: &str, file: &str, g: f64) -> Result<GroundMotion, RecordError
         }
         if no == 4 {
             let (n, dt) = npts_dt(&line).ok_or_else(|| {
-                err(file, 4, format!("expected NPTS and DT in header line 4, found `{}`", line.trim()))
+                err(
+                    file,
+                    4,
+                    format!(
+                        "expected NPTS and DT in header line 4, found `{}`",
+                        line.trim()
+                    ),
+                )
             })?;
             if !(dt > 0.0 && dt.is_finite()) || n == 0 {
-                return Err(err(file, 4, format!("NPTS = {n} and DT = {dt} must be positive")));
+                return Err(err(
+                    file,
+                    4,
+                    format!("NPTS = {n} and DT = {dt} must be positive"),
+                ));
             }
             values.reserve(n);
             npts_dt_found = Some((n, dt));
             continue;
         }
         for token in line.split_whitespace() {
-            let v: f64 = token.parse().map_err(|_| {
-                err(file, no, format!("expected a number, found `{token}`"))
-            })?;
+            let v: f64 = token
+                .parse()
+                .map_err(|_| err(file, no, format!("expected a number, found `{token}`")))?;
             if !v.is_finite() {
                 return Err(err(file, no, format!("value `{token}` is not finite")));
             }
             values.push(v * g);
         }
     }
-    let (n, dt) = npts_dt_found.ok_or_else(|| err(file, 0, "the file has fewer than 4 header lines"))?;
+    let (n, dt) =
+        npts_dt_found.ok_or_else(|| err(file, 0, "the file has fewer than 4 header lines"))?;
     if values.len() != n {
         return Err(err(
             file,
             0,
-            format!("header line 4 says NPTS = {n} but the file holds {} values", values.len()),
+            format!(
+                "header line 4 says NPTS = {n} but the file holds {} values",
+                values.len()
+            ),
         ));
     }
     Ok(GroundMotion::uniform(dt, values))
@@ -206,7 +221,11 @@ fn parse_csv(text: &str, file: &str) -> Result<GroundMotion, RecordError> {
         accel.push(row[1]);
     }
     if time.len() < 2 {
-        return Err(err(file, 0, "a record needs at least two samples `time,accel`"));
+        return Err(err(
+            file,
+            0,
+            "a record needs at least two samples `time,accel`",
+        ));
     }
     Ok(GroundMotion { time, accel })
 }
@@ -242,7 +261,13 @@ pub fn advance_with_record(
 
 /// Runs a whole record from the simulator's current time to the record's end.
 pub fn run(sim: &mut Simulator, record: &GroundMotion, scale: f64) -> Result<(), SimError> {
-    advance_with_record(sim, record.duration(), record, scale, &Excitation::default())
+    advance_with_record(
+        sim,
+        record.duration(),
+        record,
+        scale,
+        &Excitation::default(),
+    )
 }
 
 #[cfg(test)]

@@ -58,7 +58,8 @@ mod tests {
             s = step(w, z, dt, s, 1.0, 1.0);
             let t = i as f64 * dt;
             let exact = (1.0
-                - (-z * w * t).exp() * ((wd * t).cos() + z / (1.0 - z * z).sqrt() * (wd * t).sin()))
+                - (-z * w * t).exp()
+                    * ((wd * t).cos() + z / (1.0 - z * z).sqrt() * (wd * t).sin()))
                 / (w * w);
             assert!((s.0 - exact).abs() < 1e-14, "step load at t = {t}");
         }

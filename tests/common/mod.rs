@@ -1,0 +1,418 @@
+//! Test helpers: records, and an exact event-driven reference solution
+//! written independently of the engine's reduced (cluster) formulation.
+//!
+//! The reference integrates the *full* chain (every body's u and v): in each
+//! mode the stick forces come from the Delassus system `W_SS f_S = -(b_S +
+//! W_SL f_L)` solved with nalgebra, the mode's linear ODE with linear forcing
+//! is propagated exactly by a matrix exponential, and guard crossings are
+//! found by bisection on that exact solution (to ~1e-14 s). Only the choice
+//! of mode at an event is delegated to the engine's `mode::resolve`, which
+//! the property tests check against projected Gauss–Seidel separately.
+#![allow(dead_code)]
+
+use nalgebra::{DMatrix, DVector};
+use stacked_live_load::mode::{self, Contact, Mode, ResolveRequest};
+use stacked_live_load::system::System;
+use stacked_live_load::{GroundMotion, Params};
+use std::f64::consts::PI;
+use std::path::PathBuf;
+
+/// `../shared/ground_motions/NAME` beside the repository.
+pub fn shared_record(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/ground_motions")
+        .join(name)
+}
+
+pub fn read_shared(name: &str, g: f64) -> GroundMotion {
+    GroundMotion::read(&shared_record(name), g).expect("shared record readable")
+}
+
+/// First `seconds` of a record (same samples).
+pub fn truncate(gm: &GroundMotion, seconds: f64) -> GroundMotion {
+    let n = gm.time.partition_point(|&t| t <= seconds + 1e-9);
+    GroundMotion {
+        time: gm.time[..n].to_vec(),
+        accel: gm.accel[..n].to_vec(),
+    }
+}
+
+/// Rescales a record to a given peak ground acceleration (m/s^2).
+pub fn scaled_to_pga(gm: &GroundMotion, pga: f64) -> GroundMotion {
+    let s = pga / gm.pga();
+    GroundMotion {
+        time: gm.time.clone(),
+        accel: gm.accel.iter().map(|a| a * s).collect(),
+    }
+}
+
+/// Deterministic broadband record: a sum of 40 sines from 0.2 to 20 Hz with
+/// fixed pseudo-random phases, under a build-up/decay envelope, peak `pga`.
+pub fn broadband(duration: f64, dt: f64, pga: f64) -> GroundMotion {
+    let mut seed: u64 = 0x2545F4914F6CDD1D;
+    let mut rnd = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let comps: Vec<(f64, f64)> = (0..40)
+        .map(|i| (0.2 * 100f64.powf(i as f64 / 39.0), 2.0 * PI * rnd()))
+        .collect();
+    let n = (duration / dt).round() as usize + 1;
+    let raw: Vec<f64> = (0..n)
+        .map(|i| {
+            let t = i as f64 * dt;
+            let env =
+                (t / 2.0).min(1.0) * (-(t - 0.5 * duration).max(0.0) / (0.2 * duration)).exp();
+            env * comps
+                .iter()
+                .map(|(f, ph)| (2.0 * PI * f * t + ph).sin() / f.sqrt())
+                .sum::<f64>()
+        })
+        .collect();
+    let peak = raw.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    GroundMotion::uniform(dt, raw.iter().map(|a| a * pga / peak).collect())
+}
+
+/// Matrix exponential by scaling and squaring of a degree-20 Taylor sum.
+pub fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
+    let norm = a.iter().map(|x| x.abs()).sum::<f64>().max(1e-300);
+    let s = (norm.log2().ceil() + 1.0).max(0.0) as i32;
+    let scaled = a / 2f64.powi(s);
+    let n = a.nrows();
+    let mut term = DMatrix::identity(n, n);
+    let mut sum = DMatrix::identity(n, n);
+    for k in 1..=20 {
+        term = &term * &scaled / k as f64;
+        sum += &term;
+    }
+    for _ in 0..s {
+        sum = &sum * &sum;
+    }
+    sum
+}
+
+/// Peaks and final state of a reference run.
+#[derive(Clone, Debug)]
+pub struct ExactResult {
+    pub peak_u0: f64,
+    pub peak_slip: Vec<f64>,
+    pub u: Vec<f64>,
+    pub v: Vec<f64>,
+    pub events: usize,
+    /// u0 at every record sample.
+    pub u0_history: Vec<f64>,
+}
+
+/// The exact event-driven reference.
+pub struct Exact {
+    sys: System,
+    m: usize,
+    mass: Vec<f64>,
+    k: f64,
+    c: f64,
+    normal: Vec<f64>,
+}
+
+impl Exact {
+    pub fn new(p: &Params) -> Exact {
+        let m = p.n_blocks + 1;
+        let mut mass = vec![p.mp];
+        mass.extend((0..p.n_blocks).map(|j| p.alpha[j] * p.mp));
+        let omega = 2.0 * PI / p.tp;
+        let k = p.mp * omega * omega;
+        let normal: Vec<f64> = (0..m)
+            .map(|j| {
+                if j == 0 {
+                    0.0
+                } else {
+                    p.g * mass[j..].iter().sum::<f64>()
+                }
+            })
+            .collect();
+        Exact {
+            sys: System::new(p).unwrap(),
+            m,
+            mass,
+            k,
+            c: 2.0 * p.zeta * (k * p.mp).sqrt(),
+            normal,
+        }
+    }
+
+    /// Absolute accelerations of the bodies and interface forces (index j-1
+    /// for interface j) in `mode`, from the Delassus system.
+    pub fn chain(&self, mode: &Mode, u0: f64, v0: f64) -> (DVector<f64>, DVector<f64>) {
+        let n = self.m - 1;
+        let s0 = -self.k * u0 - self.c * v0;
+        let mut f = DVector::zeros(n);
+        let stuck: Vec<usize> = (1..=n).filter(|&j| mode.is_stuck(j)).collect();
+        for j in 1..=n {
+            if !mode.is_stuck(j) {
+                f[j - 1] = -self.sys.muk[j] * self.normal[j] * mode.contact[j].slip_sign();
+            }
+        }
+        if !stuck.is_empty() {
+            // r = W f + b, relative accelerations of the interfaces.
+            let w = |a: usize, b: usize| -> f64 {
+                if a == b {
+                    1.0 / self.mass[a - 1] + 1.0 / self.mass[a]
+                } else if a + 1 == b {
+                    -1.0 / self.mass[a]
+                } else if b + 1 == a {
+                    -1.0 / self.mass[b]
+                } else {
+                    0.0
+                }
+            };
+            let ns = stuck.len();
+            let wss = DMatrix::from_fn(ns, ns, |r, q| w(stuck[r], stuck[q]));
+            let rhs = DVector::from_fn(ns, |r, _| {
+                let j = stuck[r];
+                let b = if j == 1 { -s0 / self.mass[0] } else { 0.0 };
+                let wl: f64 = (1..=n)
+                    .filter(|&l| !mode.is_stuck(l))
+                    .map(|l| w(j, l) * f[l - 1])
+                    .sum();
+                -(b + wl)
+            });
+            let fs = wss.lu().solve(&rhs).expect("W_SS is positive definite");
+            for (r, &j) in stuck.iter().enumerate() {
+                f[j - 1] = fs[r];
+            }
+        }
+        let a = DVector::from_fn(self.m, |i, _| {
+            let below = if i == 0 { s0 } else { f[i - 1] };
+            let above = if i < n { f[i] } else { 0.0 };
+            (below - above) / self.mass[i]
+        });
+        (a, f)
+    }
+
+    /// Generator of the augmented state z = [u, v, 1, ag, ag'] in `mode`.
+    fn generator(&self, mode: &Mode) -> DMatrix<f64> {
+        let m = self.m;
+        let dim = 2 * m + 3;
+        let (a0, _) = self.chain(mode, 0.0, 0.0);
+        let (au, _) = self.chain(mode, 1.0, 0.0);
+        let (av, _) = self.chain(mode, 0.0, 1.0);
+        let mut h = DMatrix::zeros(dim, dim);
+        for i in 0..m {
+            h[(i, m + i)] = 1.0;
+            h[(m + i, 0)] = au[i] - a0[i];
+            h[(m + i, m)] = av[i] - a0[i];
+            h[(m + i, 2 * m)] = a0[i];
+            h[(m + i, 2 * m + 1)] = -1.0;
+        }
+        h[(2 * m + 1, 2 * m + 2)] = 1.0;
+        h
+    }
+
+    fn guard(&self, mode: &Mode, z: &DVector<f64>, j: usize) -> f64 {
+        let m = self.m;
+        match mode.contact[j] {
+            Contact::Stuck => {
+                let (_, f) = self.chain(mode, z[0], z[m]);
+                self.sys.mus[j] * self.normal[j] - f[j - 1].abs()
+            }
+            Contact::Free => f64::INFINITY,
+            c => c.slip_sign() * (z[m + j] - z[m + j - 1]),
+        }
+    }
+
+    /// Runs the record from rest; `sub` samples per record interval are used
+    /// to detect guard crossings and extrema before bisection.
+    pub fn run(&self, gm: &GroundMotion, sub: usize) -> ExactResult {
+        let m = self.m;
+        let n = m - 1;
+        let mut mode = Mode::all_stuck(&self.sys);
+        let mut z = DVector::zeros(2 * m + 3);
+        z[2 * m] = 1.0;
+        let mut res = ExactResult {
+            peak_u0: 0.0,
+            peak_slip: vec![0.0; n],
+            u: vec![],
+            v: vec![],
+            events: 0,
+            u0_history: vec![0.0],
+        };
+        let mut cache: Option<(Mode, f64, DMatrix<f64>, DMatrix<f64>)> = None;
+        let extended: Vec<(f64, f64)> = gm
+            .time
+            .iter()
+            .copied()
+            .zip(gm.accel.iter().copied())
+            .collect();
+        for w in extended.windows(2) {
+            let (t_a, a_a) = w[0];
+            let (t_b, a_b) = w[1];
+            let len = t_b - t_a;
+            let slope = (a_b - a_a) / len;
+            z[2 * m + 1] = a_a;
+            z[2 * m + 2] = slope;
+            let mut tau = 0.0;
+            while tau < len {
+                let delta = (len - tau) / sub as f64;
+                let fresh = !matches!(&cache, Some((cm, cd, _, _)) if *cm == mode && *cd == delta);
+                if fresh {
+                    let h = self.generator(&mode);
+                    cache = Some((mode, delta, expm(&(&h * delta)), h));
+                }
+                let (_, _, e_delta, h) = cache.as_ref().unwrap();
+                let z_start = z.clone();
+                let armed: Vec<bool> = (1..=n).map(|j| self.guard(&mode, &z, j) > 0.0).collect();
+                let mut armed = armed;
+                let mut prev = z.clone();
+                let mut event = None;
+                for k in 1..=sub {
+                    let next = e_delta * &prev;
+                    let tk = |f: f64| (k as f64 - 1.0 + f) * delta;
+                    // Extrema of u0 and of the slips between samples.
+                    self.track_peaks(h, &prev, &next, delta, &mut res);
+                    for j in 1..=n {
+                        let g = self.guard(&mode, &next, j);
+                        if !armed[j - 1] {
+                            armed[j - 1] = g > 0.0;
+                        } else if g < 0.0 {
+                            let f = bisect(0.0, 1.0, |f| {
+                                let zz = expm(&(h * (f * delta))) * &prev;
+                                self.guard(&mode, &zz, j) > 0.0
+                            });
+                            if event.is_none_or(|(t, _)| tk(f) < t) {
+                                event = Some((tk(f), j));
+                            }
+                        }
+                    }
+                    if event.is_some() {
+                        break;
+                    }
+                    prev = next;
+                }
+                match event {
+                    None => {
+                        z = prev;
+                        tau = len;
+                    }
+                    Some((te, located)) => {
+                        z = expm(&(h * te)) * &z_start;
+                        tau += te;
+                        z[2 * m + 1] = a_a + slope * tau;
+                        self.switch(&mut mode, &mut z, located);
+                        res.events += 1;
+                        let abs_u0 = z[0].abs();
+                        res.peak_u0 = res.peak_u0.max(abs_u0);
+                    }
+                }
+            }
+            res.u0_history.push(z[0]);
+        }
+        res.u = (0..m).map(|i| z[i]).collect();
+        res.v = (0..m).map(|i| z[m + i]).collect();
+        res
+    }
+
+    /// Fires every guard that is <= 0: joins velocities, resolves the mode.
+    /// The located guard fires whatever its sign after rounding.
+    fn switch(&self, mode: &mut Mode, z: &mut DVector<f64>, located: usize) {
+        let m = self.m;
+        let n = m - 1;
+        let mut must_break = 0u32;
+        let mut joined = vec![false; m];
+        for j in 1..=n {
+            if j == located || self.guard(mode, z, j) <= 0.0 {
+                match mode.contact[j] {
+                    Contact::Stuck => must_break |= 1 << j,
+                    Contact::Free => {}
+                    _ => joined[j] = true,
+                }
+            }
+        }
+        // Momentum-average velocity over groups linked by stuck or joined interfaces.
+        let mut start = 0;
+        for j in 1..=m {
+            if j < m && (mode.is_stuck(j) || joined[j]) {
+                continue;
+            }
+            if j - start > 1 {
+                let mm: f64 = (start..j).map(|i| self.mass[i]).sum();
+                let p: f64 = (start..j).map(|i| self.mass[i] * z[m + i]).sum();
+                for i in start..j {
+                    z[m + i] = p / mm;
+                }
+            }
+            start = j;
+        }
+        // In exact arithmetic stuck bodies share one velocity; rounding in
+        // the full-state propagation does not, so stuck counts as zero.
+        let zero = (1..=n)
+            .filter(|&j| !self.sys.is_free(j) && (joined[j] || mode.is_stuck(j)))
+            .fold(0, |acc, j| acc | (1 << j));
+        let was_stuck = (1..=n)
+            .filter(|&j| mode.is_stuck(j))
+            .fold(0, |a, j| a | (1 << j));
+        let req = ResolveRequest {
+            mode: *mode,
+            zero,
+            must_break,
+            was_stuck,
+            load0: -self.k * z[0] - self.c * z[m],
+        };
+        let before = *mode;
+        *mode = mode::resolve(&self.sys, &req).mode;
+        if std::env::var("EXACT_DEBUG").is_ok() {
+            let (_, f) = self.chain(&before, z[0], z[m]);
+            eprintln!("exact switch: u0 {:.4e} v {:?} F {:?} {:?} -> {:?} must_break {must_break:b} zero {zero:b}", z[0], (0..m).map(|i| z[m+i]).collect::<Vec<_>>(), f.as_slice(), &before.contact[1..m], &mode.contact[1..m]);
+        }
+    }
+
+    /// Peak |u0| and |slip| between two exact samples: at the ends and where
+    /// the rate crosses zero (bisection on the exact solution).
+    fn track_peaks(
+        &self,
+        h: &DMatrix<f64>,
+        a: &DVector<f64>,
+        b: &DVector<f64>,
+        delta: f64,
+        res: &mut ExactResult,
+    ) {
+        let m = self.m;
+        let mut check =
+            |value: &dyn Fn(&DVector<f64>) -> f64, rate: &dyn Fn(&DVector<f64>) -> f64| -> f64 {
+                let mut best = value(a).abs().max(value(b).abs());
+                if rate(a) * rate(b) < 0.0 {
+                    let s = rate(a).signum();
+                    let f = bisect(0.0, 1.0, |f| {
+                        rate(&(expm(&(h * (f * delta))) * a)) * s > 0.0
+                    });
+                    best = best.max(value(&(expm(&(h * (f * delta))) * a)).abs());
+                }
+                best
+            };
+        let p = check(&|z| z[0], &|z| z[m]);
+        res.peak_u0 = res.peak_u0.max(p);
+        for j in 1..m {
+            let p = check(&|z| z[j] - z[j - 1], &|z| z[m + j] - z[m + j - 1]);
+            res.peak_slip[j - 1] = res.peak_slip[j - 1].max(p);
+        }
+    }
+}
+
+/// Bisection for the switch of a predicate from true (at `lo`) to false;
+/// returns the right end of the final bracket.
+pub fn bisect(mut lo: f64, mut hi: f64, mut pred: impl FnMut(f64) -> bool) -> f64 {
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if pred(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
+/// Relative difference.
+pub fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(1e-300)
+}
