@@ -79,6 +79,11 @@ pub struct Dynamics {
     pub slip_force: [f64; MAX_BODIES],
     /// For a stuck interface j: mass of bodies j..=top of its cluster.
     pub mass_above: [f64; MAX_BODIES],
+    /// `slip_load / mass` of each cluster: the whole absolute acceleration
+    /// of clusters above the structure's, constant in the mode.
+    pub accel_const: [f64; MAX_BODIES],
+    /// 1 / mass of the structure's cluster.
+    pub inv_mass0: f64,
 }
 
 impl Dynamics {
@@ -92,6 +97,8 @@ impl Dynamics {
             slip_load: [0.0; MAX_BODIES],
             slip_force: [0.0; MAX_BODIES],
             mass_above: [0.0; MAX_BODIES],
+            accel_const: [0.0; MAX_BODIES],
+            inv_mass0: 0.0,
         };
         for i in 0..=sys.n {
             if i == 0 || !mode.is_stuck(i) {
@@ -112,6 +119,10 @@ impl Dynamics {
             }
         }
         for c in 0..d.n_clusters {
+            d.accel_const[c] = d.slip_load[c] / d.mass[c];
+        }
+        d.inv_mass0 = 1.0 / d.mass[0];
+        for c in 0..d.n_clusters {
             let mut above = 0.0;
             for j in (d.bottom[c]..=d.top[c]).rev() {
                 above += sys.mass[j];
@@ -131,8 +142,17 @@ impl Dynamics {
     /// (used only by cluster 0).
     #[inline]
     pub fn accel(&self, c: usize, load0: f64) -> f64 {
-        let extra = if c == 0 { load0 } else { 0.0 };
-        (self.slip_load[c] + extra) / self.mass[c]
+        if c == 0 {
+            self.accel0(load0)
+        } else {
+            self.accel_const[c]
+        }
+    }
+
+    /// Absolute acceleration of the structure's cluster.
+    #[inline]
+    pub fn accel0(&self, load0: f64) -> f64 {
+        (self.slip_load[0] + load0) * self.inv_mass0
     }
 
     /// Friction force of interface j (force of body j-1 on body j).
