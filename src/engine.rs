@@ -286,6 +286,7 @@ pub struct Simulator {
     peak_a0: f64,
     ag_now: f64,
     fext_now: f64,
+    last_event: f64,
     stats: Stats,
 }
 
@@ -314,10 +315,12 @@ impl Simulator {
             peak_a0: 0.0,
             ag_now: 0.0,
             fext_now: 0.0,
+            last_event: f64::NAN,
             stats: Stats::default(),
         };
         sim.resolve_mode(0);
         sim.stats.events = 0;
+        sim.last_event = f64::NAN;
         Ok(sim)
     }
 
@@ -360,6 +363,11 @@ impl Simulator {
 
     pub fn time(&self) -> f64 {
         self.t
+    }
+
+    /// Time of the latest mode switch (NaN before the first).
+    pub fn last_event_time(&self) -> f64 {
+        self.last_event
     }
 
     pub fn stats(&self) -> Stats {
@@ -562,6 +570,7 @@ impl Simulator {
         }
         if res.mode != self.mode {
             self.stats.events += 1;
+            self.last_event = self.t;
             self.mode = res.mode;
             self.dynamics = Dynamics::new(&self.sys, &self.mode);
         }

@@ -416,3 +416,36 @@ pub fn bisect(mut lo: f64, mut hi: f64, mut pred: impl FnMut(f64) -> bool) -> f6
 pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-300)
 }
+
+/// Small deterministic generator (xorshift64*) for property tests.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_f64(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next_f64()
+    }
+
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_f64() * n as f64) as usize % n
+    }
+}
+
+/// Runs a simulator through a record sample by sample, calling `each` after
+/// every sample (for histories and per-instant checks).
+pub fn run_sampled(
+    sim: &mut stacked_live_load::Simulator,
+    gm: &GroundMotion,
+    mut each: impl FnMut(&stacked_live_load::Simulator),
+) {
+    for &t in &gm.time[1..] {
+        stacked_live_load::record::advance_with_record(sim, t, gm, 1.0, &Default::default()).unwrap();
+        each(sim);
+    }
+}
