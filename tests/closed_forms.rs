@@ -34,7 +34,10 @@ fn scene(n: usize, mu: f64) -> Params {
 /// Largest |a - b| over two histories, relative to the peak of `b`.
 fn history_error(a: &[f64], b: &[f64]) -> f64 {
     let peak = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / peak
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / peak
 }
 
 #[test]
@@ -104,7 +107,10 @@ fn a_stack_whose_upper_interface_cannot_slip_is_the_single_block() {
     let (oa, ob) = (a.outputs(), b.outputs());
     assert!(rel(oa.peak_up, ob.peak_up) < 1e-9);
     assert!(rel(oa.peak_slip[0], ob.peak_slip[0]) < 1e-9);
-    assert!(ob.n_events > 10, "the scene must slide for the check to mean anything");
+    assert!(
+        ob.n_events > 10,
+        "the scene must slide for the check to mean anything"
+    );
 }
 
 /// A structure stiff and damped enough to act as a rigid base (its
@@ -122,7 +128,9 @@ fn harmonic(p_amp: f64, omega: f64, duration: f64, dt: f64) -> GroundMotion {
     let n = (duration / dt).round() as usize + 1;
     GroundMotion::uniform(
         dt,
-        (0..n).map(|i| -p_amp * (omega * i as f64 * dt).sin()).collect(),
+        (0..n)
+            .map(|i| -p_amp * (omega * i as f64 * dt).sin())
+            .collect(),
     )
 }
 
@@ -139,7 +147,10 @@ fn rigid_block_breaks_away_at_the_closed_form_instant() {
     eprintln!("breakaway error {:e} s", got - expected);
     // Tolerance: the base is rigid to ~1e-6 and the tabulated sine is linear
     // between 1e-4 s samples (error ~(ω dt)²/8 in acceleration).
-    assert!((got - expected).abs() < 1e-6, "breakaway at {got}, expected {expected}");
+    assert!(
+        (got - expected).abs() < 1e-6,
+        "breakaway at {got}, expected {expected}"
+    );
     assert!(!s.outputs().stuck[0]);
 }
 
@@ -158,10 +169,17 @@ fn rigid_block_slides_continuously_with_the_closed_form_amplitude() {
     let max = last_cycle.iter().cloned().fold(f64::MIN, f64::max);
     let min = last_cycle.iter().cloned().fold(f64::MAX, f64::min);
     let expected = 2.0 * p_amp / (omega * omega) * (1.0 - (PI * eta / 2.0).powi(2)).sqrt();
-    eprintln!("sliding amplitude relative error {:e}", rel(max - min, expected));
+    eprintln!(
+        "sliding amplitude relative error {:e}",
+        rel(max - min, expected)
+    );
     // Tolerance 3e-5 (measured 5e-6): extremes are read on the 1e-4 s grid, the
     // base follows the ground to ~1e-6, and 12 cycles leave a small transient.
-    assert!(rel(max - min, expected) < 3e-5, "{} vs {expected}", max - min);
+    assert!(
+        rel(max - min, expected) < 3e-5,
+        "{} vs {expected}",
+        max - min
+    );
 }
 
 /// A block so heavy that it stays at absolute rest while its friction
@@ -239,17 +257,29 @@ fn coulomb_free_vibration_loses_4f_over_k_per_cycle() {
     for i in 1..u.len() - 1 {
         if u[i] > 0.0 && u[i] >= u[i - 1] && u[i] > u[i + 1] {
             let (a, b, c) = (u[i - 1], u[i], u[i + 1]);
-            extremes.push((i as f64 * dt, b - (a - c).powi(2) / (8.0 * (a - 2.0 * b + c))));
+            extremes.push((
+                i as f64 * dt,
+                b - (a - c).powi(2) / (8.0 * (a - 2.0 * b + c)),
+            ));
         }
     }
     assert!(extremes.len() >= 2, "{extremes:?}");
     let drop = 4.0 * f / k;
     for (n, (t, x)) in extremes.iter().enumerate() {
         let cycle = (n + 1) as f64;
-        eprintln!("Coulomb decay cycle {cycle}: error {:e} m (drop {drop:e})", x - (x0 - cycle * drop));
+        eprintln!(
+            "Coulomb decay cycle {cycle}: error {:e} m (drop {drop:e})",
+            x - (x0 - cycle * drop)
+        );
         // Between stops the motion is a shifted free vibration that RK4 follows
         // to ~1e-12 of x0 at this step; the parabola reads the extreme to O(dt³).
-        assert!((x - (x0 - cycle * drop)).abs() < 1e-12, "cycle {cycle}: {x}");
-        assert!((t - cycle * p.tp).abs() < 2.0 * dt, "period: extreme at {t}");
+        assert!(
+            (x - (x0 - cycle * drop)).abs() < 1e-12,
+            "cycle {cycle}: {x}"
+        );
+        assert!(
+            (t - cycle * p.tp).abs() < 2.0 * dt,
+            "period: extreme at {t}"
+        );
     }
 }

@@ -377,7 +377,7 @@ impl Exact {
         res: &mut ExactResult,
     ) {
         let m = self.m;
-        let mut check =
+        let check =
             |value: &dyn Fn(&DVector<f64>) -> f64, rate: &dyn Fn(&DVector<f64>) -> f64| -> f64 {
                 let mut best = value(a).abs().max(value(b).abs());
                 if rate(a) * rate(b) < 0.0 {
@@ -417,6 +417,12 @@ pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-300)
 }
 
+/// Relative difference of slips, with a 1 nm floor: an interface that never
+/// slips is 0 in one solution and ~1e-17 m of rounding in the other.
+pub fn rel_slip(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(1e-9)
+}
+
 /// Small deterministic generator (xorshift64*) for property tests.
 pub struct Rng(pub u64);
 
@@ -445,7 +451,8 @@ pub fn run_sampled(
     mut each: impl FnMut(&stacked_live_load::Simulator),
 ) {
     for &t in &gm.time[1..] {
-        stacked_live_load::record::advance_with_record(sim, t, gm, 1.0, &Default::default()).unwrap();
+        stacked_live_load::record::advance_with_record(sim, t, gm, 1.0, &Default::default())
+            .unwrap();
         each(sim);
     }
 }
