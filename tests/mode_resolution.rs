@@ -1,0 +1,281 @@
+//! Property tests of the mode resolution over thousands of random states
+//! (N = 1..8, random masses and frictions, some interfaces at zero relative
+//! velocity), against an independent projected Gauss–Seidel (PGS) solution
+//! of the box-constrained problem (RESEARCH.md §1).
+
+mod common;
+use common::Rng;
+use stacked_live_load::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
+use stacked_live_load::system::System;
+use stacked_live_load::Params;
+
+struct Case {
+    sys: System,
+    req: ResolveRequest,
+}
+
+fn random_case(rng: &mut Rng, static_factor: (f64, f64)) -> Case {
+    let mut p = Params {
+        n_blocks: 1 + rng.below(8),
+        ..Params::default()
+    };
+    for j in 0..p.n_blocks {
+        p.alpha[j] = rng.uniform(0.05, 1.5);
+        let mu = if rng.next_f64() < 0.1 {
+            0.0
+        } else {
+            rng.uniform(0.02, 0.6)
+        };
+        p.muk[j] = mu;
+        p.mus[j] = mu * rng.uniform(static_factor.0, static_factor.1);
+    }
+    let sys = System::new(&p).unwrap();
+    let mut mode = Mode::all_stuck(&sys);
+    let (mut zero, mut was_stuck) = (0u32, 0u32);
+    for j in 1..=sys.n {
+        if sys.is_free(j) {
+            continue;
+        }
+        if rng.next_f64() < 0.5 {
+            zero |= 1 << j;
+            if rng.next_f64() < 0.5 {
+                was_stuck |= 1 << j;
+            }
+        } else {
+            mode.contact[j] = if rng.next_f64() < 0.5 {
+                Contact::SlipForward
+            } else {
+                Contact::SlipBackward
+            };
+        }
+    }
+    // Spring, damper and external force on the structure: up to a few times
+    // the friction capacity, so that both sticking and slipping occur.
+    let capacity = sys.normal[1] * 0.6;
+    let load0 = rng.uniform(-3.0, 3.0) * capacity;
+    Case {
+        sys,
+        req: ResolveRequest {
+            mode,
+            zero,
+            must_break: 0,
+            was_stuck,
+            load0,
+        },
+    }
+}
+
+/// Delassus matrix entry W_ab of the chain (RESEARCH.md §1).
+fn w(sys: &System, a: usize, b: usize) -> f64 {
+    if a == b {
+        1.0 / sys.mass[a - 1] + 1.0 / sys.mass[a]
+    } else if a + 1 == b {
+        -1.0 / sys.mass[a]
+    } else if b + 1 == a {
+        -1.0 / sys.mass[b]
+    } else {
+        0.0
+    }
+}
+
+/// Interface forces by PGS: the zero-velocity interfaces solve the box QP
+/// min ½ fᵀW f + qᵀf, |f_j| <= mu_j N_j; the others carry kinetic friction.
+fn pgs(case: &Case) -> Vec<f64> {
+    let sys = &case.sys;
+    let n = sys.n;
+    let mut f = vec![0.0; n + 1];
+    for j in 1..=n {
+        if case.req.zero & (1 << j) == 0 {
+            f[j] = -sys.muk[j] * sys.normal[j] * case.req.mode.contact[j].slip_sign();
+        }
+    }
+    let b = |j: usize| {
+        if j == 1 {
+            -case.req.load0 / sys.mass[0]
+        } else {
+            0.0
+        }
+    };
+    for _sweep in 0..200_000 {
+        let mut change = 0.0f64;
+        for j in 1..=n {
+            if case.req.zero & (1 << j) == 0 {
+                continue;
+            }
+            let r: f64 = b(j) + (1..=n).map(|l| w(sys, j, l) * f[l]).sum::<f64>();
+            let limit = sys.mus[j] * sys.normal[j];
+            let new = (f[j] - r / w(sys, j, j)).clamp(-limit, limit);
+            change = change.max((new - f[j]).abs());
+            f[j] = new;
+        }
+        if change <= 1e-16 * sys.normal[1] {
+            break;
+        }
+    }
+    f
+}
+
+fn forces(case: &Case, mode: &Mode) -> Vec<f64> {
+    let d = Dynamics::new(&case.sys, mode);
+    (0..=case.sys.n)
+        .map(|j| {
+            if j == 0 || case.sys.is_free(j) {
+                0.0
+            } else {
+                d.force(j, mode, case.req.load0)
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn equal_static_and_kinetic_friction_matches_projected_gauss_seidel() {
+    let mut rng = Rng(0x9E3779B97F4A7C15);
+    let mut worst = 0.0f64;
+    let (mut stuck_seen, mut slip_started) = (0, 0);
+    for i in 0..5000 {
+        let case = random_case(&mut rng, (1.0, 1.0));
+        let res = mode::resolve(&case.sys, &case.req);
+        assert!(res.consistent, "case {i}: no consistent mode");
+        let got = forces(&case, &res.mode);
+        let expected = pgs(&case);
+        for j in 1..=case.sys.n {
+            // Tolerance 1e-12 of the largest friction capacity (the bottom
+            // interface's normal force) on every interface force.
+            let err = (got[j] - expected[j]).abs() / case.sys.normal[1];
+            worst = worst.max(err);
+            assert!(
+                err < 1e-12,
+                "case {i}, interface {j}: {} vs {}",
+                got[j],
+                expected[j]
+            );
+            if case.req.zero & (1 << j) != 0 {
+                match res.mode.contact[j] {
+                    Contact::Stuck => stuck_seen += 1,
+                    _ => slip_started += 1,
+                }
+            }
+        }
+    }
+    eprintln!(
+        "worst force difference {worst:.1e}; {stuck_seen} stuck, {slip_started} starting to slip"
+    );
+    assert!(
+        stuck_seen > 1000 && slip_started > 1000,
+        "both outcomes must be exercised"
+    );
+}
+
+/// Every assignment of the zero-velocity interfaces, with its violation.
+fn all_assignments(case: &Case) -> Vec<(Mode, f64)> {
+    let zero: Vec<usize> = (1..=case.sys.n)
+        .filter(|&j| case.req.zero & (1 << j) != 0)
+        .collect();
+    let mut out = vec![];
+    for code in 0..3usize.pow(zero.len() as u32) {
+        let mut mode = case.req.mode;
+        let mut c = code;
+        for &j in &zero {
+            mode.contact[j] = [Contact::Stuck, Contact::SlipForward, Contact::SlipBackward][c % 3];
+            c /= 3;
+        }
+        out.push((
+            mode,
+            mode::violation(&case.sys, &mode, case.req.zero, case.req.load0),
+        ));
+    }
+    out
+}
+
+fn stuck_count(mode: &Mode, mask: u32) -> u32 {
+    (1..=mode.n)
+        .filter(|&j| mask & (1 << j) != 0 && mode.is_stuck(j))
+        .count() as u32
+}
+
+#[test]
+fn static_above_kinetic_friction_follows_the_selection_rule() {
+    // With mus > muk several assignments can be consistent (RESEARCH.md §1);
+    // the resolver must return one of them, with the largest stick set, and
+    // among those the most of the previously stuck interfaces.
+    let mut rng = Rng(0xD1B54A32D192ED03);
+    let mut ambiguous = 0;
+    for i in 0..3000 {
+        let case = random_case(&mut rng, (1.05, 2.0));
+        let res = mode::resolve(&case.sys, &case.req);
+        let candidates = all_assignments(&case);
+        let consistent: Vec<&(Mode, f64)> = candidates
+            .iter()
+            .filter(|(_, v)| *v <= mode::CONSISTENCY_TOL)
+            .collect();
+        assert!(
+            !consistent.is_empty(),
+            "case {i}: brute force finds no consistent mode"
+        );
+        assert!(res.consistent, "case {i}: resolver found none");
+        if consistent.len() > 1 {
+            ambiguous += 1;
+        }
+        let all = u32::MAX;
+        let best_stuck = consistent
+            .iter()
+            .map(|(m, _)| stuck_count(m, all))
+            .max()
+            .unwrap();
+        assert_eq!(
+            stuck_count(&res.mode, all),
+            best_stuck,
+            "case {i}: largest stick set"
+        );
+        let best_kept = consistent
+            .iter()
+            .filter(|(m, _)| stuck_count(m, all) == best_stuck)
+            .map(|(m, _)| stuck_count(m, case.req.was_stuck))
+            .max()
+            .unwrap();
+        assert_eq!(
+            stuck_count(&res.mode, case.req.was_stuck),
+            best_kept,
+            "case {i}: keep stuck"
+        );
+    }
+    eprintln!("{ambiguous} of 3000 states had more than one consistent mode");
+    assert!(ambiguous > 100, "the rule must actually be exercised");
+}
+
+#[test]
+fn an_interface_at_its_static_limit_breaks() {
+    // One block on a structure pushed so that the stick force is just above
+    // mus N: the resolver must let it slip when told it must break, and the
+    // slip direction must oppose the force.
+    let mut p = Params::default();
+    p.n_blocks = 1;
+    p.mus[0] = 0.3;
+    p.muk[0] = 0.2;
+    let sys = System::new(&p).unwrap();
+    let stuck = Mode::all_stuck(&sys);
+    // Stuck force F = m1 * load0 / (m0 + m1); choose load0 so that F = mus N.
+    let limit = sys.mus[1] * sys.normal[1];
+    let load0 = limit * (sys.mass[0] + sys.mass[1]) / sys.mass[1];
+    let req = ResolveRequest {
+        mode: stuck,
+        zero: 1 << 1,
+        must_break: 1 << 1,
+        was_stuck: 1 << 1,
+        load0,
+    };
+    let res = mode::resolve(&sys, &req);
+    assert!(res.consistent);
+    // Positive force on the block means it lags: it slides backwards.
+    assert_eq!(res.mode.contact[1], Contact::SlipBackward);
+    // Without the break request the same instant may stay stuck (prefer sticking).
+    let res = mode::resolve(
+        &sys,
+        &ResolveRequest {
+            must_break: 0,
+            ..req
+        },
+    );
+    assert_eq!(res.mode.contact[1], Contact::Stuck);
+}
