@@ -216,9 +216,14 @@ impl Segment<'_> {
         let d = self.dynamics;
         match self.mode.contact[j] {
             Contact::Stuck => {
+                // Same slack as the resolver's consistency check, so that a
+                // stick it accepted starts with a guard >= 0. In a stack with
+                // equal friction coefficients the stick force of a block riding
+                // on a sliding one is exactly mus N; without the slack rounding
+                // alone would make it chatter.
                 let (_, fext) = self.inputs(t);
                 let f = d.force(j, self.mode, self.load0(y, fext));
-                self.sys.mus[j] * self.sys.normal[j] - f.abs()
+                self.sys.mus[j] * self.sys.normal[j] * (1.0 + mode::CONSISTENCY_TOL) - f.abs()
             }
             Contact::SlipForward | Contact::SlipBackward => {
                 let v_rel = y[2 * d.cluster_of[j] + 1] - y[2 * d.cluster_of[j - 1] + 1];
@@ -654,14 +659,24 @@ impl Simulator {
     }
 
     /// One internal step to `t1` with events located inside it.
+    ///
+    /// Chatter guard: a guard that is violated from the very start of a
+    /// segment (no positive value inside it) fires at once, as a zero-length
+    /// event; this settles degenerate contacts, such as a block "slipping"
+    /// with exactly zero relative acceleration on an equal-friction stack. If
+    /// the same interface does it again within the step, its guard is muted
+    /// and switched at the step end; so are all guards after
+    /// `MAX_EVENTS_PER_STEP` events in one step.
     fn step_located(&mut self, t1: f64, exc: &Excitation, t_ref: f64) {
         let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
         let mut muted: u32 = 0;
+        let mut fired_at_once: u32 = 0;
         let mut events = 0;
         while self.t < t1 {
             let t0 = self.t;
             let h = t1 - t0;
             let y0 = self.pack();
+            let mut at_once: u32 = 0;
             let (y1, earliest) = {
                 let seg = self.segment(exc, t_ref);
                 let y1 = seg.rk4(&y0, t0, h);
@@ -692,11 +707,17 @@ impl Simulator {
                                 earliest = Some((th, j));
                             }
                         }
-                        None => muted |= 1 << j, // violated at once: chatter guard
+                        None if fired_at_once & (1 << j) == 0 => at_once |= 1 << j,
+                        None => muted |= 1 << j,
                     }
                 }
                 (y1, earliest)
             };
+            if at_once != 0 {
+                fired_at_once |= at_once;
+                self.fire_violated(exc, t_ref, 0, at_once);
+                continue;
+            }
             match earliest {
                 None => {
                     self.accept(&y0, &y1, t0, h, exc, t_ref);

@@ -214,7 +214,8 @@ impl Exact {
         match mode.contact[j] {
             Contact::Stuck => {
                 let (_, f) = self.chain(mode, z[0], z[m]);
-                self.sys.mus[j] * self.normal[j] - f[j - 1].abs()
+                // Same slack as the engine's consistency tolerance (equal-mu stacks).
+                self.sys.mus[j] * self.normal[j] * (1.0 + mode::CONSISTENCY_TOL) - f[j - 1].abs()
             }
             Contact::Free => f64::INFINITY,
             c => c.slip_sign() * (z[m + j] - z[m + j - 1]),
