@@ -797,3 +797,72 @@ impl Simulator {
         o
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_inputs_are_rejected_by_name_and_leave_the_state_alone() {
+        let mut sim = Simulator::new(&Params::default(), &Settings::default()).unwrap();
+        let nan_ag = Excitation {
+            ag: f64::NAN,
+            ..Default::default()
+        };
+        let e = sim.advance(0.01, &nan_ag).unwrap_err();
+        assert!(e.to_string().starts_with("ag = NaN"));
+        let inf_force = Excitation {
+            fext_rate: f64::INFINITY,
+            ..Default::default()
+        };
+        assert!(matches!(
+            sim.advance(0.01, &inf_force),
+            Err(SimError::BadInput {
+                name: "der(Fext)",
+                ..
+            })
+        ));
+        sim.advance(0.01, &Excitation::default()).unwrap();
+        assert!(matches!(
+            sim.advance(0.005, &Excitation::default()),
+            Err(SimError::BadTime { .. })
+        ));
+        assert_eq!(sim.time(), 0.01);
+        let bad = Settings {
+            max_step: -1.0,
+            ..Settings::default()
+        };
+        let e = Simulator::new(&Params::default(), &bad).unwrap_err();
+        assert_eq!(e.field, "maxStep");
+    }
+
+    #[test]
+    fn reset_reproduces_a_run_bit_for_bit() {
+        let mut sim = Simulator::new(&Params::default(), &Settings::default()).unwrap();
+        let exc = Excitation {
+            ag: 3.0,
+            ag_rate: -20.0,
+            ..Default::default()
+        };
+        sim.advance(0.3, &exc).unwrap();
+        let first = sim.outputs();
+        sim.reset();
+        sim.advance(0.3, &exc).unwrap();
+        assert_eq!(sim.outputs(), first);
+        assert!(first.n_events > 0);
+    }
+
+    #[test]
+    fn internal_step_respects_both_bounds() {
+        let p = Params::default();
+        let omega = 2.0 * std::f64::consts::PI / p.tp;
+        let auto = Simulator::new(&p, &Settings::default()).unwrap();
+        assert_eq!(auto.max_internal_step(), ACCURATE_H_OMEGA / omega);
+        let coarse = Settings {
+            max_step: 10.0,
+            ..Settings::default()
+        };
+        let sim = Simulator::new(&p, &coarse).unwrap();
+        assert_eq!(sim.max_internal_step(), STABLE_H_OMEGA / omega);
+    }
+}

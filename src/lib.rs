@@ -9,6 +9,7 @@
 //! - [`engine`]: RK4 with located events, peaks and energies.
 //! - [`record`]: ground-motion files and driving a simulation through one.
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
+//! - [`synthetic`]: the embedded default ground motion.
 
 pub mod engine;
 pub mod hermite;
@@ -16,6 +17,7 @@ pub mod mode;
 pub mod params;
 pub mod record;
 pub mod sdof;
+pub mod synthetic;
 pub mod system;
 
 pub use engine::{Excitation, Outputs, SimError, Simulator, Stats};

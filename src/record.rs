@@ -74,12 +74,28 @@ impl GroundMotion {
         self.accel.iter().fold(0.0, |m, a| m.max(a.abs()))
     }
 
+    /// Index of the first sample strictly after `t`: guessed from the mean
+    /// spacing (exact for uniform records), checked, else binary search.
+    fn first_after(&self, t: f64) -> usize {
+        let n = self.time.len();
+        if n >= 2 {
+            let span = self.time[n - 1] - self.time[0];
+            let guess = ((t - self.time[0]) / span * (n - 1) as f64).floor() + 1.0;
+            if guess >= 1.0 && guess < n as f64 {
+                let i = guess as usize;
+                if self.time[i - 1] <= t && t < self.time[i] {
+                    return i;
+                }
+            }
+        }
+        self.time.partition_point(|&x| x <= t)
+    }
+
     /// The linear piece that holds at `t` (looking forward): its value at
     /// `t`, its slope, and where it ends (the next sample, or infinity).
     pub fn piece_at(&self, t: f64) -> (f64, f64, f64) {
         let n = self.time.len();
-        // Index of the first sample strictly after t.
-        let i = self.time.partition_point(|&x| x <= t);
+        let i = self.first_after(t);
         if i == 0 {
             let end = self.time.first().copied().unwrap_or(f64::INFINITY);
             return (0.0, 0.0, end);

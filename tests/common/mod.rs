@@ -46,34 +46,7 @@ pub fn scaled_to_pga(gm: &GroundMotion, pga: f64) -> GroundMotion {
     }
 }
 
-/// Deterministic broadband record: a sum of 40 sines from 0.2 to 20 Hz with
-/// fixed pseudo-random phases, under a build-up/decay envelope, peak `pga`.
-pub fn broadband(duration: f64, dt: f64, pga: f64) -> GroundMotion {
-    let mut seed: u64 = 0x2545F4914F6CDD1D;
-    let mut rnd = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let comps: Vec<(f64, f64)> = (0..40)
-        .map(|i| (0.2 * 100f64.powf(i as f64 / 39.0), 2.0 * PI * rnd()))
-        .collect();
-    let n = (duration / dt).round() as usize + 1;
-    let raw: Vec<f64> = (0..n)
-        .map(|i| {
-            let t = i as f64 * dt;
-            let env =
-                (t / 2.0).min(1.0) * (-(t - 0.5 * duration).max(0.0) / (0.2 * duration)).exp();
-            env * comps
-                .iter()
-                .map(|(f, ph)| (2.0 * PI * f * t + ph).sin() / f.sqrt())
-                .sum::<f64>()
-        })
-        .collect();
-    let peak = raw.iter().fold(0.0f64, |m, a| m.max(a.abs()));
-    GroundMotion::uniform(dt, raw.iter().map(|a| a * pga / peak).collect())
-}
+pub use stacked_live_load::synthetic::broadband;
 
 /// Matrix exponential by scaling and squaring of a degree-20 Taylor sum.
 pub fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
