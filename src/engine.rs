@@ -126,21 +126,28 @@ impl Outputs {
     }
 }
 
-/// Packed vector: (u, v) of every cluster, then the input and viscous
-/// energy quadratures. Friction work needs no quadrature of its own: RK4's
-/// quadrature of `-F v_rel` equals `-F` times RK4's own slip increment.
-const STATE: usize = 2 * MAX_BODIES + 2;
-type Vector = [f64; STATE];
+/// The structure's cluster during a step: displacement, velocity, and the
+/// input and viscous work done on it since the step start.
+type Structure = [f64; 4];
 
-/// The frozen ingredients of one RK4 segment: a mode and a linear excitation.
+/// One step's frozen ingredients: the mode, the excitation, and every
+/// body's state at the step start `t0`.
+///
+/// Only the structure's cluster is integrated by RK4 stages. Every other
+/// cluster has a constant absolute acceleration in the mode, so RK4 on it
+/// reduces exactly to its Taylor polynomial (u cubic, v quadratic in time)
+/// and RK4's quadrature of its input power `ag v` to Simpson's rule, exact for
+/// that cubic: they are evaluated in closed form at any instant of the step.
 struct Segment<'a> {
     sys: &'a System,
     mode: &'a Mode,
     dynamics: &'a Dynamics,
     exc: Excitation,
     t_ref: f64,
-    /// Offset of the energy quadratures in the packed vector.
-    e0: usize,
+    t0: f64,
+    ag0: f64,
+    u: &'a [f64; MAX_BODIES],
+    v: &'a [f64; MAX_BODIES],
 }
 
 impl Segment<'_> {
@@ -153,66 +160,75 @@ impl Segment<'_> {
         )
     }
 
-    #[inline]
-    fn load0(&self, y: &Vector, fext: f64) -> f64 {
-        Dynamics::structure_load(self.sys, y[0], y[1], fext)
+    fn start(&self) -> Structure {
+        [self.u[0], self.v[0], 0.0, 0.0]
     }
 
-    /// Derivative of (u0, v0, input power, viscous power) of the
-    /// structure's cluster.
+    /// Rates of (u0, v0, input work, viscous work) of the structure's cluster.
     #[inline]
-    fn structure_rates(&self, t: f64, u0: f64, v0: f64) -> [f64; 4] {
+    fn structure_rates(&self, t: f64, u0: f64, v0: f64) -> Structure {
         let (ag, fext) = self.inputs(t);
         let d = self.dynamics;
         let a = d.accel0(Dynamics::structure_load(self.sys, u0, v0, fext)) - ag;
         [v0, a, (fext - ag * d.mass[0]) * v0, self.sys.c * v0 * v0]
     }
 
-    /// One RK4 step of length `h` from `y0` at `t0`.
-    ///
-    /// Only the structure's cluster needs the four stages: every other
-    /// cluster has a constant absolute acceleration in the mode, so RK4 on it
-    /// reduces to its exact Taylor polynomial (u cubic, v quadratic in t), and
-    /// RK4's quadrature of its input power `ag v` is Simpson's rule, exact for
-    /// that cubic. Both are evaluated in closed form: the same numbers RK4
-    /// gives, without the work.
-    fn rk4(&self, y0: &Vector, t0: f64, h: f64) -> Vector {
-        let e0 = self.e0;
-        let mut y1 = *y0;
-        let x = [y0[0], y0[1]];
-        let k1 = self.structure_rates(t0, x[0], x[1]);
-        let k2 = self.structure_rates(t0 + 0.5 * h, x[0] + 0.5 * h * k1[0], x[1] + 0.5 * h * k1[1]);
-        let k3 = self.structure_rates(t0 + 0.5 * h, x[0] + 0.5 * h * k2[0], x[1] + 0.5 * h * k2[1]);
-        let k4 = self.structure_rates(t0 + h, x[0] + h * k3[0], x[1] + h * k3[1]);
-        let w = h / 6.0;
-        let combine = |i: usize| w * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
-        y1[0] += combine(0);
-        y1[1] += combine(1);
-        y1[e0] += combine(2);
-        y1[e0 + 1] += combine(3);
-
-        let d = self.dynamics;
-        if d.n_clusters > 1 {
-            let (ag0, _) = self.inputs(t0);
-            let (agm, _) = self.inputs(t0 + 0.5 * h);
-            let (ag1, _) = self.inputs(t0 + h);
-            let mut input_work = 0.0;
-            for c in 1..d.n_clusters {
-                let (u, v) = (y0[2 * c], y0[2 * c + 1]);
-                let a = d.accel_const[c];
-                let vm = v + 0.25 * h * (2.0 * a - ag0 - agm);
-                let v1 = v + h * (a - agm);
-                y1[2 * c] = u + h * v + h * h * (0.5 * a - (ag0 + 2.0 * agm) / 6.0);
-                y1[2 * c + 1] = v1;
-                input_work -= d.mass[c] * w * (ag0 * v + 4.0 * agm * vm + ag1 * v1);
-            }
-            y1[e0] += input_work;
-        }
-        y1
+    /// The structure's cluster after one RK4 step of length `tau` from `t0`.
+    fn structure_after(&self, tau: f64) -> Structure {
+        let (u, v, t0) = (self.u[0], self.v[0], self.t0);
+        let k1 = self.structure_rates(t0, u, v);
+        let k2 = self.structure_rates(t0 + 0.5 * tau, u + 0.5 * tau * k1[0], v + 0.5 * tau * k1[1]);
+        let k3 = self.structure_rates(t0 + 0.5 * tau, u + 0.5 * tau * k2[0], v + 0.5 * tau * k2[1]);
+        let k4 = self.structure_rates(t0 + tau, u + tau * k3[0], v + tau * k3[1]);
+        let w = tau / 6.0;
+        let sum = |i: usize| w * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+        [u + sum(0), v + sum(1), sum(2), sum(3)]
     }
 
-    /// Guard of interface j: positive while its current contact state holds.
-    fn guard(&self, j: usize, y: &Vector, t: f64) -> f64 {
+    /// Velocity of cluster `c` at `t0 + tau`; `x` is the structure's cluster then.
+    #[inline]
+    fn velocity(&self, c: usize, x: &Structure, tau: f64) -> f64 {
+        if c == 0 {
+            x[1]
+        } else {
+            let d = self.dynamics;
+            self.v[d.bottom[c]] + tau * (d.accel_const[c] - self.ag0)
+                - 0.5 * tau * tau * self.exc.ag_rate
+        }
+    }
+
+    /// Displacement increment of cluster `c` over `tau`.
+    #[inline]
+    fn displacement_increment(&self, c: usize, x: &Structure, tau: f64) -> f64 {
+        if c == 0 {
+            x[0] - self.u[0]
+        } else {
+            let d = self.dynamics;
+            let relative_accel = d.accel_const[c] - self.ag0;
+            tau * (self.v[d.bottom[c]]
+                + tau * (0.5 * relative_accel - tau * self.exc.ag_rate / 6.0))
+        }
+    }
+
+    /// Input work `-M ∫ ag v dt` on the clusters above the structure's over `tau`.
+    fn upper_input_work(&self, tau: f64) -> f64 {
+        let d = self.dynamics;
+        let x = self.start(); // not used by clusters c >= 1
+        let (ag_a, _) = self.inputs(self.t0);
+        let (ag_m, _) = self.inputs(self.t0 + 0.5 * tau);
+        let (ag_b, _) = self.inputs(self.t0 + tau);
+        (1..d.n_clusters)
+            .map(|c| {
+                let simpson = ag_a * self.velocity(c, &x, 0.0)
+                    + 4.0 * ag_m * self.velocity(c, &x, 0.5 * tau)
+                    + ag_b * self.velocity(c, &x, tau);
+                -d.mass[c] * tau / 6.0 * simpson
+            })
+            .sum()
+    }
+
+    /// Guard of interface j at `t0 + tau`: positive while its contact state holds.
+    fn guard(&self, j: usize, x: &Structure, tau: f64) -> f64 {
         let d = self.dynamics;
         match self.mode.contact[j] {
             Contact::Stuck => {
@@ -221,23 +237,30 @@ impl Segment<'_> {
                 // equal friction coefficients the stick force of a block riding
                 // on a sliding one is exactly mus N; without the slack rounding
                 // alone would make it chatter.
-                let (_, fext) = self.inputs(t);
-                let f = d.force(j, self.mode, self.load0(y, fext));
+                let (_, fext) = self.inputs(self.t0 + tau);
+                let load0 = Dynamics::structure_load(self.sys, x[0], x[1], fext);
+                let f = d.force(j, self.mode, load0);
                 self.sys.mus[j] * self.sys.normal[j] * (1.0 + mode::CONSISTENCY_TOL) - f.abs()
             }
             Contact::SlipForward | Contact::SlipBackward => {
-                let v_rel = y[2 * d.cluster_of[j] + 1] - y[2 * d.cluster_of[j - 1] + 1];
+                let v_rel = self.velocity(d.cluster_of[j], x, tau)
+                    - self.velocity(d.cluster_of[j - 1], x, tau);
                 self.mode.contact[j].slip_sign() * v_rel
             }
             Contact::Free => f64::INFINITY,
         }
     }
 
+    /// Guard j after `theta h`, re-stepping RK4 from the step start.
+    fn guard_at(&self, j: usize, theta: f64, h: f64) -> f64 {
+        self.guard(j, &self.structure_after(theta * h), theta * h)
+    }
+
     /// Instant (as a fraction of `h`) where guard j crosses zero, bracketed
     /// between `a` (guard > 0) and `b` (guard <= 0); returns the right end of
     /// the final bracket, where the guard has already changed sign. Illinois
     /// iteration on RK4 re-steps from the step start.
-    fn locate(&self, j: usize, y0: &Vector, t0: f64, h: f64, bracket: [(f64, f64); 2]) -> f64 {
+    fn locate(&self, j: usize, h: f64, bracket: [(f64, f64); 2]) -> f64 {
         let [(mut a, mut ga), (mut b, mut gb)] = bracket;
         let tol = EVENT_TIME_TOL / h;
         let mut side = 0i8;
@@ -250,7 +273,7 @@ impl Segment<'_> {
             if !(c > a && c < b) || iter >= 60 {
                 c = 0.5 * (a + b);
             }
-            let gc = self.guard(j, &self.rk4(y0, t0, c * h), t0 + c * h);
+            let gc = self.guard_at(j, c, h);
             if gc > 0.0 {
                 a = c;
                 ga = gc;
@@ -453,46 +476,42 @@ impl Simulator {
     }
 
     fn segment(&self, exc: &Excitation, t_ref: f64) -> Segment<'_> {
-        let nc = self.dynamics.n_clusters;
         Segment {
             sys: &self.sys,
             mode: &self.mode,
             dynamics: &self.dynamics,
             exc: *exc,
             t_ref,
-            e0: 2 * nc,
+            t0: self.t,
+            ag0: exc.ag + exc.ag_rate * (self.t - t_ref),
+            u: &self.u,
+            v: &self.v,
         }
     }
 
-    fn pack(&self) -> Vector {
-        let d = &self.dynamics;
-        let mut y = [0.0; STATE];
-        for c in 0..d.n_clusters {
-            y[2 * c] = self.u[d.bottom[c]];
-            y[2 * c + 1] = self.v[d.bottom[c]];
-        }
-        let e0 = 2 * d.n_clusters;
-        y[e0] = self.e_input;
-        y[e0 + 1] = self.e_viscous;
-        y
-    }
-
-    /// Takes the packed state `y1` reached after `h` from `y0` at `t0`:
-    /// moves every body with its cluster, adds the friction work, and raises
-    /// the peaks to the largest value of the cubic between the ends.
-    fn accept(&mut self, y0: &Vector, y1: &Vector, t0: f64, h: f64, exc: &Excitation, t_ref: f64) {
+    /// Takes the step of length `h` that ends with the structure's cluster at
+    /// `x1`: moves every body with its cluster, adds the work terms, and raises
+    /// the peaks to the largest value of the cubic between the step ends.
+    fn accept(&mut self, x1: &Structure, h: f64, exc: &Excitation, t_ref: f64) {
         let n = self.sys.n;
-        let (a0_start, jerk_start) = self.structure_accel_and_jerk(exc, t_ref, t0);
+        let (mut du, mut v_end) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
+        let upper_work = {
+            let seg = self.segment(exc, t_ref);
+            for c in 0..self.dynamics.n_clusters {
+                du[c] = seg.displacement_increment(c, x1, h);
+                v_end[c] = seg.velocity(c, x1, h);
+            }
+            seg.upper_input_work(h)
+        };
+        let (a0_start, jerk_start) = self.structure_accel_and_jerk(exc, t_ref, self.t);
+        let (u0_start, v0_start) = (self.u[0], self.v[0]);
         let d = &self.dynamics;
         for j in 1..=n {
             let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
             if hi != lo {
                 let slip0 = self.u[j] - self.u[j - 1];
-                let increment = (y1[2 * hi] - y0[2 * hi]) - (y1[2 * lo] - y0[2 * lo]);
-                let (vrel0, vrel1) = (
-                    y0[2 * hi + 1] - y0[2 * lo + 1],
-                    y1[2 * hi + 1] - y1[2 * lo + 1],
-                );
+                let increment = du[hi] - du[lo];
+                let (vrel0, vrel1) = (self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]);
                 self.e_friction[j] -= d.slip_force[j] * increment;
                 let peak = &mut self.peak_slip[j];
                 *peak = peak.max(hermite::max_abs_above(
@@ -507,17 +526,17 @@ impl Simulator {
         }
         for i in 0..=n {
             let c = d.cluster_of[i];
-            self.u[i] += y1[2 * c] - y0[2 * c];
-            self.v[i] = y1[2 * c + 1];
+            self.u[i] += du[c];
+            self.v[i] = v_end[c];
         }
-        let e0 = 2 * d.n_clusters;
-        self.e_input = y1[e0];
-        self.e_viscous = y1[e0 + 1];
-        self.t = t0 + h;
+        self.u[0] = x1[0];
+        self.e_input += x1[2] + upper_work;
+        self.e_viscous += x1[3];
+        self.t += h;
         self.stats.steps += 1;
 
         let (a0_end, jerk_end) = self.structure_accel_and_jerk(exc, t_ref, self.t);
-        let peak = hermite::max_abs_above(y0[0], y0[1], y1[0], y1[1], h, self.peak_u0);
+        let peak = hermite::max_abs_above(u0_start, v0_start, x1[0], x1[1], h, self.peak_u0);
         self.peak_u0 = self.peak_u0.max(peak);
         let peak = hermite::max_abs_above(a0_start, jerk_start, a0_end, jerk_end, h, self.peak_a0);
         self.peak_a0 = self.peak_a0.max(peak);
@@ -621,10 +640,10 @@ impl Simulator {
     /// interfaces and for j > n).
     fn guards_now(&self, exc: &Excitation, t_ref: f64) -> [f64; MAX_BODIES] {
         let seg = self.segment(exc, t_ref);
-        let y = self.pack();
+        let x = seg.start();
         let mut g = [f64::INFINITY; MAX_BODIES];
         for (j, gj) in g.iter_mut().enumerate().take(self.sys.n + 1).skip(1) {
-            *gj = seg.guard(j, &y, self.t);
+            *gj = seg.guard(j, &x, 0.0);
         }
         g
     }
@@ -675,21 +694,20 @@ impl Simulator {
         while self.t < t1 {
             let t0 = self.t;
             let h = t1 - t0;
-            let y0 = self.pack();
             let mut at_once: u32 = 0;
-            let (y1, earliest) = {
+            let (x1, earliest) = {
                 let seg = self.segment(exc, t_ref);
-                let y1 = seg.rk4(&y0, t0, h);
+                let (x0, x1) = (seg.start(), seg.structure_after(h));
                 let mut earliest: Option<(f64, usize)> = None;
                 for j in 1..=self.sys.n {
                     if muted & (1 << j) != 0 || self.sys.is_free(j) {
                         continue;
                     }
-                    let g1 = seg.guard(j, &y1, t1);
+                    let g1 = seg.guard(j, &x1, h);
                     if g1 >= 0.0 {
                         continue;
                     }
-                    let g0 = seg.guard(j, &y0, t0);
+                    let g0 = seg.guard(j, &x0, 0.0);
                     let start = if g0 > 0.0 {
                         Some((0.0, g0))
                     } else {
@@ -697,12 +715,12 @@ impl Simulator {
                         // switched): bracket from the first positive sample.
                         (1..=6)
                             .map(|k| 0.5f64.powi(k))
-                            .map(|th| (th, seg.guard(j, &seg.rk4(&y0, t0, th * h), t0 + th * h)))
+                            .map(|th| (th, seg.guard_at(j, th, h)))
                             .find(|&(_, g)| g > 0.0)
                     };
                     match start {
                         Some(a) => {
-                            let th = seg.locate(j, &y0, t0, h, [a, (1.0, g1)]);
+                            let th = seg.locate(j, h, [a, (1.0, g1)]);
                             if earliest.is_none_or(|(e, _)| th < e) {
                                 earliest = Some((th, j));
                             }
@@ -711,7 +729,7 @@ impl Simulator {
                         None => muted |= 1 << j,
                     }
                 }
-                (y1, earliest)
+                (x1, earliest)
             };
             if at_once != 0 {
                 fired_at_once |= at_once;
@@ -720,14 +738,15 @@ impl Simulator {
             }
             match earliest {
                 None => {
-                    self.accept(&y0, &y1, t0, h, exc, t_ref);
+                    self.accept(&x1, h, exc, t_ref);
+                    self.t = t1;
                 }
                 Some((theta, located)) => {
                     // The located guard fires whatever its sign after
                     // rounding; others fire if they have reached zero too.
                     let h_event = theta * h;
-                    let ye = self.segment(exc, t_ref).rk4(&y0, t0, h_event);
-                    self.accept(&y0, &ye, t0, h_event, exc, t_ref);
+                    let xe = self.segment(exc, t_ref).structure_after(h_event);
+                    self.accept(&xe, h_event, exc, t_ref);
                     if theta >= 1.0 {
                         self.t = t1;
                     }
@@ -747,10 +766,9 @@ impl Simulator {
 
     /// One internal step to `t1` switching modes only at its end (baseline).
     fn step_switch_at_end(&mut self, t1: f64, exc: &Excitation, t_ref: f64) {
-        let t0 = self.t;
-        let y0 = self.pack();
-        let y1 = self.segment(exc, t_ref).rk4(&y0, t0, t1 - t0);
-        self.accept(&y0, &y1, t0, t1 - t0, exc, t_ref);
+        let h = t1 - self.t;
+        let x1 = self.segment(exc, t_ref).structure_after(h);
+        self.accept(&x1, h, exc, t_ref);
         self.t = t1;
         let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
         self.fire_violated(exc, t_ref, all, 0);

@@ -1,0 +1,27 @@
+//! Times one 20 s simulation (for profiling; the figures are `cargo bench`'s).
+use stacked_live_load::*;
+fn main() {
+    let n: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(2);
+    let mut p = Params::default();
+    p.n_blocks = n;
+    let gm = synthetic::default_record(p.g);
+    let reps = 300;
+    let t = std::time::Instant::now();
+    let mut st = Stats::default();
+    for _ in 0..reps {
+        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        record::run(&mut sim, &gm, 1.0).unwrap();
+        st = sim.stats();
+        std::hint::black_box(sim.outputs());
+    }
+    let el = t.elapsed().as_secs_f64() / reps as f64;
+    println!(
+        "N={n}: {:.3} ms per sim, {} steps, {:.1} ns/step",
+        el * 1e3,
+        st.steps,
+        el * 1e9 / st.steps as f64
+    );
+}
