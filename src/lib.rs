@@ -12,13 +12,18 @@
 //! - [`synthetic`]: the embedded default ground motion.
 
 pub mod engine;
+pub mod fmi2;
 pub mod hermite;
+pub mod instance;
 pub mod mode;
+pub mod model_description;
 pub mod params;
 pub mod record;
 pub mod sdof;
+pub mod snapshot;
 pub mod synthetic;
 pub mod system;
+pub mod variables;
 
 pub use engine::{Excitation, Outputs, SimError, Simulator, Stats};
 pub use params::{Method, ParamError, Params, Settings, MAX_BLOCKS};

@@ -85,6 +85,20 @@ fn check(field: &str, value: f64, ok: bool, allowed: &'static str) -> Result<(),
     }
 }
 
+/// The range of one scalar field, by its public name (`alpha[2]` is checked
+/// as `alpha`). Cross-field rules (muk <= mus) are in [`Params::validate`].
+pub fn check_scalar(field: &str, value: f64) -> Result<(), ParamError> {
+    let base = field.split('[').next().unwrap_or(field);
+    let (ok, allowed) = match base {
+        "mp" | "Tp" | "g" | "alpha" => (value > 0.0, "finite and > 0"),
+        "zeta" => ((0.0..1.0).contains(&value), "finite, >= 0 and < 1"),
+        "mus" | "muk" => (value >= 0.0, "finite and >= 0"),
+        "maxStep" => (value >= 0.0, "finite and >= 0 (0 = automatic)"),
+        _ => (true, "finite"),
+    };
+    check(field, value, ok, allowed)
+}
+
 impl Params {
     /// Checks every field; the first one out of range is reported.
     pub fn validate(&self) -> Result<(), ParamError> {
@@ -95,33 +109,23 @@ impl Params {
                 allowed: "an integer from 0 to 8",
             });
         }
-        check("mp", self.mp, self.mp > 0.0, "finite and > 0")?;
-        check("Tp", self.tp, self.tp > 0.0, "finite and > 0")?;
-        check(
-            "zeta",
-            self.zeta,
-            (0.0..1.0).contains(&self.zeta),
-            "finite, >= 0 and < 1",
-        )?;
-        check("g", self.g, self.g > 0.0, "finite and > 0")?;
+        for (name, value) in [
+            ("mp", self.mp),
+            ("Tp", self.tp),
+            ("zeta", self.zeta),
+            ("g", self.g),
+        ] {
+            check_scalar(name, value)?;
+        }
         for j in 0..self.n_blocks {
             let name = |s: &str| format!("{}[{}]", s, j + 1);
-            check(
-                &name("alpha"),
-                self.alpha[j],
-                self.alpha[j] > 0.0,
-                "finite and > 0",
-            )?;
-            check(
-                &name("mus"),
-                self.mus[j],
-                self.mus[j] >= 0.0,
-                "finite and >= 0",
-            )?;
+            check_scalar(&name("alpha"), self.alpha[j])?;
+            check_scalar(&name("mus"), self.mus[j])?;
+            check_scalar(&name("muk"), self.muk[j])?;
             check(
                 &name("muk"),
                 self.muk[j],
-                self.muk[j] >= 0.0 && self.muk[j] <= self.mus[j],
+                self.muk[j] <= self.mus[j],
                 "finite, >= 0 and <= mus of the same interface",
             )?;
         }
@@ -161,12 +165,7 @@ impl Default for Settings {
 
 impl Settings {
     pub fn validate(&self) -> Result<(), ParamError> {
-        check(
-            "maxStep",
-            self.max_step,
-            self.max_step >= 0.0,
-            "finite and >= 0 (0 = automatic)",
-        )
+        check_scalar("maxStep", self.max_step)
     }
 }
 

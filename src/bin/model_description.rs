@@ -1,0 +1,7 @@
+//! Prints the generated modelDescription.xml (used by scripts/build_fmu.sh).
+fn main() {
+    print!(
+        "{}",
+        stacked_live_load::model_description::model_description()
+    );
+}

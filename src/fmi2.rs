@@ -1,0 +1,644 @@
+//! The FMI 2.0 Co-Simulation C API. Every export is a thin wrapper: it
+//! checks pointers, converts arguments, calls the safe [`Instance`] inside a
+//! panic boundary (a panic becomes `fmi2Fatal` and a log message, never an
+//! unwind into the importer) and returns the status. No global state.
+#![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
+
+use crate::instance::{Instance, LogSink, NullSink, SavedState, Status};
+use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+pub type fmi2Component = *mut c_void;
+pub type fmi2ComponentEnvironment = *mut c_void;
+pub type fmi2FMUstate = *mut c_void;
+pub type fmi2ValueReference = c_uint;
+pub type fmi2Real = f64;
+pub type fmi2Integer = c_int;
+pub type fmi2Boolean = c_int;
+pub type fmi2String = *const c_char;
+pub type fmi2Byte = c_char;
+/// fmi2OK = 0, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending.
+pub type fmi2Status = c_int;
+/// fmi2ModelExchange = 0, fmi2CoSimulation = 1.
+pub type fmi2Type = c_int;
+/// fmi2DoStepStatus = 0, fmi2PendingStatus, fmi2LastSuccessfulTime, fmi2Terminated.
+pub type fmi2StatusKind = c_int;
+
+pub type fmi2CallbackLogger = Option<
+    unsafe extern "C" fn(
+        fmi2ComponentEnvironment,
+        fmi2String,
+        fmi2Status,
+        fmi2String,
+        fmi2String,
+        ...
+    ),
+>;
+pub type fmi2CallbackAllocateMemory = Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>;
+pub type fmi2CallbackFreeMemory = Option<unsafe extern "C" fn(*mut c_void)>;
+pub type fmi2StepFinished = Option<unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2Status)>;
+
+/// The importer's callbacks (FMI 2.0 `fmi2CallbackFunctions`).
+#[repr(C)]
+pub struct fmi2CallbackFunctions {
+    pub logger: fmi2CallbackLogger,
+    pub allocateMemory: fmi2CallbackAllocateMemory,
+    pub freeMemory: fmi2CallbackFreeMemory,
+    pub stepFinished: fmi2StepFinished,
+    pub componentEnvironment: fmi2ComponentEnvironment,
+}
+
+/// The GUID of this model description (change it when the interface changes).
+pub const GUID: &str = "{6b1f0c9e-3a57-4d2b-9c84-57acced11fe2}";
+
+const OK: fmi2Status = Status::Ok as fmi2Status;
+const ERROR: fmi2Status = Status::Error as fmi2Status;
+
+/// Passes messages to the importer's logger, always as the argument of a
+/// "%s" format so that a '%' in a message is never interpreted.
+struct CallbackSink {
+    logger: fmi2CallbackLogger,
+    env: fmi2ComponentEnvironment,
+    name: CString,
+}
+
+fn c_text(s: &str) -> CString {
+    CString::new(s.replace('\0', " ")).expect("NULs removed")
+}
+
+impl LogSink for CallbackSink {
+    fn log(&self, status: Status, category: &str, message: &str) {
+        if let Some(logger) = self.logger {
+            let (category, message) = (c_text(category), c_text(message));
+            unsafe {
+                logger(
+                    self.env,
+                    self.name.as_ptr(),
+                    status as fmi2Status,
+                    category.as_ptr(),
+                    c"%s".as_ptr(),
+                    message.as_ptr(),
+                )
+            };
+        }
+    }
+}
+
+/// What a `fmi2Component` points to.
+struct Component {
+    instance: Instance,
+    /// Backing store of the strings returned by fmi2GetString.
+    strings: Vec<CString>,
+}
+
+fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// Runs `f` on the component behind `c` inside a panic boundary.
+unsafe fn with(
+    c: fmi2Component,
+    func: &str,
+    f: impl FnOnce(&mut Component) -> Status,
+) -> fmi2Status {
+    if c.is_null() {
+        return ERROR;
+    }
+    let comp = &mut *(c as *mut Component);
+    match catch_unwind(AssertUnwindSafe(|| f(&mut *comp))) {
+        Ok(status) => status as fmi2Status,
+        Err(p) => comp
+            .instance
+            .fatal(func, &format!("internal error: {}", panic_text(&*p)))
+            as fmi2Status,
+    }
+}
+
+/// Builds a slice from a C array, or None if the pointer is null with n > 0.
+unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    if n == 0 {
+        Some(&[])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(std::slice::from_raw_parts(p, n))
+    }
+}
+
+unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    if n == 0 {
+        Some(&mut [])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(std::slice::from_raw_parts_mut(p, n))
+    }
+}
+
+fn null_argument(inst: &mut Instance, func: &str) -> Status {
+    inst.error(func, "a required pointer argument is NULL")
+}
+
+unsafe fn string_arg(s: fmi2String) -> Option<String> {
+    (!s.is_null()).then(|| CStr::from_ptr(s).to_string_lossy().into_owned())
+}
+
+// ---------------------------------------------------------------- common
+
+#[no_mangle]
+pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
+    c"default".as_ptr()
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2GetVersion() -> *const c_char {
+    c"2.0".as_ptr()
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetDebugLogging(
+    c: fmi2Component,
+    loggingOn: fmi2Boolean,
+    _nCategories: usize,
+    _categories: *const fmi2String,
+) -> fmi2Status {
+    with(c, "fmi2SetDebugLogging", |comp| {
+        comp.instance.set_debug_logging(loggingOn != 0)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Instantiate(
+    instanceName: fmi2String,
+    fmuType: fmi2Type,
+    fmuGUID: fmi2String,
+    fmuResourceLocation: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    _visible: fmi2Boolean,
+    loggingOn: fmi2Boolean,
+) -> fmi2Component {
+    let result = catch_unwind(|| {
+        let name = string_arg(instanceName).unwrap_or_default();
+        let sink: Box<dyn LogSink> = match functions.as_ref() {
+            Some(f) => Box::new(CallbackSink {
+                logger: f.logger,
+                env: f.componentEnvironment,
+                name: c_text(&name),
+            }),
+            None => Box::new(NullSink),
+        };
+        let resources = string_arg(fmuResourceLocation);
+        let mut instance = Instance::new(&name, resources.as_deref(), sink, loggingOn != 0);
+        const F: &str = "fmi2Instantiate";
+        if instanceName.is_null() || functions.is_null() {
+            instance.error(F, "instanceName and functions must not be NULL");
+            return std::ptr::null_mut();
+        }
+        if fmuType != 1 {
+            instance.error(
+                F,
+                format!("fmuType = {fmuType}: this FMU supports Co-Simulation (1) only"),
+            );
+            return std::ptr::null_mut();
+        }
+        let guid = string_arg(fmuGUID).unwrap_or_default();
+        if guid != GUID {
+            instance.error(
+                F,
+                format!("fmuGUID {guid} does not match this FMU's {GUID}"),
+            );
+            return std::ptr::null_mut();
+        }
+        Box::into_raw(Box::new(Component {
+            instance,
+            strings: vec![],
+        })) as fmi2Component
+    });
+    result.unwrap_or(std::ptr::null_mut())
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+    if !c.is_null() {
+        let _ = catch_unwind(|| drop(Box::from_raw(c as *mut Component)));
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetupExperiment(
+    c: fmi2Component,
+    _toleranceDefined: fmi2Boolean,
+    _tolerance: fmi2Real,
+    startTime: fmi2Real,
+    stopTimeDefined: fmi2Boolean,
+    stopTime: fmi2Real,
+) -> fmi2Status {
+    with(c, "fmi2SetupExperiment", |comp| {
+        comp.instance
+            .setup_experiment(startTime, (stopTimeDefined != 0).then_some(stopTime))
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+    with(c, "fmi2EnterInitializationMode", |comp| {
+        comp.instance.enter_initialization_mode()
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+    with(c, "fmi2ExitInitializationMode", |comp| {
+        comp.instance.exit_initialization_mode()
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+    with(c, "fmi2Terminate", |comp| comp.instance.terminate())
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+    with(c, "fmi2Reset", |comp| comp.instance.reset())
+}
+
+// ---------------------------------------------------------------- get/set
+
+macro_rules! get_values {
+    ($fname:ident, $name:literal, $t:ty, $method:ident) => {
+        #[no_mangle]
+        pub unsafe extern "C" fn $fname(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *mut $t,
+        ) -> fmi2Status {
+            with(c, $name, |comp| {
+                match (slice(vr, nvr), slice_mut(value, nvr)) {
+                    (Some(vr), Some(value)) => comp.instance.$method(vr, value),
+                    _ => null_argument(&mut comp.instance, $name),
+                }
+            })
+        }
+    };
+}
+
+macro_rules! set_values {
+    ($fname:ident, $name:literal, $t:ty, $method:ident) => {
+        #[no_mangle]
+        pub unsafe extern "C" fn $fname(
+            c: fmi2Component,
+            vr: *const fmi2ValueReference,
+            nvr: usize,
+            value: *const $t,
+        ) -> fmi2Status {
+            with(c, $name, |comp| match (slice(vr, nvr), slice(value, nvr)) {
+                (Some(vr), Some(value)) => comp.instance.$method(vr, value),
+                _ => null_argument(&mut comp.instance, $name),
+            })
+        }
+    };
+}
+
+get_values!(fmi2GetReal, "fmi2GetReal", fmi2Real, get_real);
+get_values!(fmi2GetInteger, "fmi2GetInteger", fmi2Integer, get_integer);
+get_values!(fmi2GetBoolean, "fmi2GetBoolean", fmi2Boolean, get_boolean);
+set_values!(fmi2SetReal, "fmi2SetReal", fmi2Real, set_real);
+set_values!(fmi2SetInteger, "fmi2SetInteger", fmi2Integer, set_integer);
+set_values!(fmi2SetBoolean, "fmi2SetBoolean", fmi2Boolean, set_boolean);
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    const F: &str = "fmi2GetString";
+    with(c, F, |comp| match (slice(vr, nvr), slice_mut(value, nvr)) {
+        (Some(vr), Some(value)) => match comp.instance.get_string(vr) {
+            Ok(strings) => {
+                // Valid until the next call on this instance, as FMI 2.0 allows.
+                comp.strings = strings.iter().map(|s| c_text(s)).collect();
+                for (slot, s) in value.iter_mut().zip(&comp.strings) {
+                    *slot = s.as_ptr();
+                }
+                Status::Ok
+            }
+            Err(status) => status,
+        },
+        _ => null_argument(&mut comp.instance, F),
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2String,
+) -> fmi2Status {
+    const F: &str = "fmi2SetString";
+    with(c, F, |comp| match (slice(vr, nvr), slice(value, nvr)) {
+        (Some(vr), Some(value)) => {
+            let strings: Option<Vec<String>> = value.iter().map(|&s| string_arg(s)).collect();
+            match strings {
+                Some(strings) => comp.instance.set_string(vr, &strings),
+                None => null_argument(&mut comp.instance, F),
+            }
+        }
+        _ => null_argument(&mut comp.instance, F),
+    })
+}
+
+// ---------------------------------------------------------------- FMU state
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetFMUstate(
+    c: fmi2Component,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    const F: &str = "fmi2GetFMUstate";
+    with(c, F, |comp| {
+        if FMUstate.is_null() {
+            return null_argument(&mut comp.instance, F);
+        }
+        match comp.instance.save() {
+            Ok(state) => {
+                let old = *FMUstate as *mut SavedState;
+                if old.is_null() {
+                    *FMUstate = Box::into_raw(Box::new(state)) as fmi2FMUstate;
+                } else {
+                    *old = state; // reuse the importer's earlier state
+                }
+                Status::Ok
+            }
+            Err(status) => status,
+        }
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
+    const F: &str = "fmi2SetFMUstate";
+    with(c, F, |comp| {
+        match (FMUstate as *const SavedState).as_ref() {
+            Some(state) => comp.instance.restore(state),
+            None => null_argument(&mut comp.instance, F),
+        }
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2FreeFMUstate(
+    c: fmi2Component,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    with(c, "fmi2FreeFMUstate", |_| {
+        if !FMUstate.is_null() && !(*FMUstate).is_null() {
+            drop(Box::from_raw(*FMUstate as *mut SavedState));
+            *FMUstate = std::ptr::null_mut();
+        }
+        Status::Ok
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+    c: fmi2Component,
+    FMUstate: fmi2FMUstate,
+    size: *mut usize,
+) -> fmi2Status {
+    const F: &str = "fmi2SerializedFMUstateSize";
+    with(c, F, |comp| {
+        match ((FMUstate as *const SavedState).as_ref(), size.is_null()) {
+            (Some(state), false) => {
+                *size = Instance::serialize(state).len();
+                Status::Ok
+            }
+            _ => null_argument(&mut comp.instance, F),
+        }
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SerializeFMUstate(
+    c: fmi2Component,
+    FMUstate: fmi2FMUstate,
+    serializedState: *mut fmi2Byte,
+    size: usize,
+) -> fmi2Status {
+    const F: &str = "fmi2SerializeFMUstate";
+    with(c, F, |comp| {
+        match (
+            (FMUstate as *const SavedState).as_ref(),
+            slice_mut(serializedState as *mut u8, size),
+        ) {
+            (Some(state), Some(out)) => {
+                let bytes = Instance::serialize(state);
+                if bytes.len() != size {
+                    return comp.instance.error(
+                        F,
+                        format!("size = {size}, but the state takes {} bytes", bytes.len()),
+                    );
+                }
+                out.copy_from_slice(&bytes);
+                Status::Ok
+            }
+            _ => null_argument(&mut comp.instance, F),
+        }
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
+    c: fmi2Component,
+    serializedState: *const fmi2Byte,
+    size: usize,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    const F: &str = "fmi2DeSerializeFMUstate";
+    with(c, F, |comp| {
+        match (
+            slice(serializedState as *const u8, size),
+            FMUstate.is_null(),
+        ) {
+            (Some(bytes), false) => match Instance::deserialize(bytes) {
+                Ok(state) => {
+                    let old = *FMUstate as *mut SavedState;
+                    if old.is_null() {
+                        *FMUstate = Box::into_raw(Box::new(state)) as fmi2FMUstate;
+                    } else {
+                        *old = state;
+                    }
+                    Status::Ok
+                }
+                Err(e) => comp.instance.error(F, e),
+            },
+            _ => null_argument(&mut comp.instance, F),
+        }
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
+    c: fmi2Component,
+    _vUnknown_ref: *const fmi2ValueReference,
+    _nUnknown: usize,
+    _vKnown_ref: *const fmi2ValueReference,
+    _nKnown: usize,
+    _dvKnown: *const fmi2Real,
+    _dvUnknown: *mut fmi2Real,
+) -> fmi2Status {
+    const F: &str = "fmi2GetDirectionalDerivative";
+    with(c, F, |comp| {
+        comp.instance
+            .error(F, "directional derivatives are not provided")
+    })
+}
+
+// ---------------------------------------------------------------- co-simulation
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    const F: &str = "fmi2SetRealInputDerivatives";
+    with(c, F, |comp| {
+        match (slice(vr, nvr), slice(order, nvr), slice(value, nvr)) {
+            (Some(vr), Some(order), Some(value)) => {
+                comp.instance.set_input_derivatives(vr, order, value)
+            }
+            _ => null_argument(&mut comp.instance, F),
+        }
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
+    c: fmi2Component,
+    _vr: *const fmi2ValueReference,
+    _nvr: usize,
+    _order: *const fmi2Integer,
+    _value: *mut fmi2Real,
+) -> fmi2Status {
+    const F: &str = "fmi2GetRealOutputDerivatives";
+    with(c, F, |comp| {
+        comp.instance.error(
+            F,
+            "output derivatives are not provided (maxOutputDerivativeOrder = 0)",
+        )
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2DoStep(
+    c: fmi2Component,
+    currentCommunicationPoint: fmi2Real,
+    communicationStepSize: fmi2Real,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+) -> fmi2Status {
+    with(c, "fmi2DoStep", |comp| {
+        comp.instance
+            .do_step(currentCommunicationPoint, communicationStepSize)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+    const F: &str = "fmi2CancelStep";
+    with(c, F, |comp| {
+        comp.instance.error(
+            F,
+            "fmi2DoStep never returns fmi2Pending, so there is nothing to cancel",
+        )
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Status,
+) -> fmi2Status {
+    const F: &str = "fmi2GetStatus";
+    with(c, F, |comp| match (s, value.is_null()) {
+        (0, false) => {
+            *value = OK; // fmi2DoStepStatus: every step finishes synchronously
+            Status::Ok
+        }
+        _ => comp
+            .instance
+            .error(F, format!("status kind {s} is not provided")),
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetRealStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    const F: &str = "fmi2GetRealStatus";
+    with(c, F, |comp| match (s, value.is_null()) {
+        (2, false) => {
+            *value = comp.instance.last_successful_time();
+            Status::Ok
+        }
+        _ => comp
+            .instance
+            .error(F, format!("status kind {s} is not provided")),
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetIntegerStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    _value: *mut fmi2Integer,
+) -> fmi2Status {
+    const F: &str = "fmi2GetIntegerStatus";
+    with(c, F, |comp| {
+        comp.instance
+            .error(F, format!("status kind {s} is not provided"))
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBooleanStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    const F: &str = "fmi2GetBooleanStatus";
+    with(c, F, |comp| match (s, value.is_null()) {
+        (3, false) => {
+            *value = 0; // fmi2Terminated: the FMU never asks to stop
+            Status::Ok
+        }
+        _ => comp
+            .instance
+            .error(F, format!("status kind {s} is not provided")),
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStringStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    _value: *mut fmi2String,
+) -> fmi2Status {
+    const F: &str = "fmi2GetStringStatus";
+    with(c, F, |comp| {
+        comp.instance
+            .error(F, format!("status kind {s} is not provided"))
+    })
+}

@@ -1,0 +1,841 @@
+//! One FMU instance in safe Rust: the FMI 2.0 Co-Simulation state machine,
+//! variables, inputs and their derivatives, the ground-motion record, the
+//! simulator, status queries and saved states. The C ABI in [`crate::fmi2`]
+//! only checks pointers, converts arguments and calls in here.
+
+use crate::engine::{Excitation, Outputs, Simulator};
+use crate::params::{check_scalar, Method, ParamError, Params, Settings, MAX_BLOCKS};
+use crate::record::{self, GroundMotion};
+use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
+use crate::variables::{Causality, Id};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// FMI 2.0 status codes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[repr(i32)]
+pub enum Status {
+    Ok = 0,
+    Warning = 1,
+    Discard = 2,
+    Error = 3,
+    Fatal = 4,
+    Pending = 5,
+}
+
+/// Where log messages go (the importer's logger, or a test's buffer).
+pub trait LogSink {
+    fn log(&self, status: Status, category: &str, message: &str);
+}
+
+/// The states of the FMI 2.0 Co-Simulation state machine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    Instantiated,
+    InitializationMode,
+    StepComplete,
+    Terminated,
+    Error,
+}
+
+/// Values of every parameter, exactly as the importer set them.
+#[derive(Clone, Debug, PartialEq)]
+struct ParameterValues {
+    params: Params,
+    record_file: String,
+    record_scale: f64,
+    solver: i32,
+    max_step: f64,
+}
+
+impl Default for ParameterValues {
+    fn default() -> Self {
+        ParameterValues {
+            params: Params::default(),
+            record_file: String::new(),
+            record_scale: 1.0,
+            solver: 1,
+            max_step: 0.0,
+        }
+    }
+}
+
+impl ParameterValues {
+    fn settings(&self) -> Settings {
+        Settings {
+            method: if self.solver == 2 {
+                Method::StepEnd
+            } else {
+                Method::EventLocated
+            },
+            max_step: self.max_step,
+        }
+    }
+}
+
+/// Everything that changes while simulating: what a saved state holds.
+#[derive(Clone)]
+struct Dynamic {
+    phase: Phase,
+    start_time: f64,
+    stop_time: Option<f64>,
+    time: f64,
+    values: ParameterValues,
+    ag: f64,
+    fext: f64,
+    der_ag: f64,
+    der_fext: f64,
+    sim: Option<Simulator>,
+}
+
+impl Dynamic {
+    fn initial() -> Dynamic {
+        Dynamic {
+            phase: Phase::Instantiated,
+            start_time: 0.0,
+            stop_time: None,
+            time: 0.0,
+            values: ParameterValues::default(),
+            ag: 0.0,
+            fext: 0.0,
+            der_ag: 0.0,
+            der_fext: 0.0,
+            sim: None,
+        }
+    }
+}
+
+/// A saved FMU state (`fmi2FMUstate`).
+#[derive(Clone)]
+pub struct SavedState(Dynamic);
+
+const STATE_MAGIC: &[u8; 8] = b"SLLSTATE";
+const STATE_VERSION: u32 = 1;
+
+pub struct Instance {
+    name: String,
+    logger: Box<dyn LogSink>,
+    debug_logging: bool,
+    resource_dir: Option<PathBuf>,
+    record: Option<(String, Arc<GroundMotion>)>,
+    outputs: Option<Outputs>,
+    d: Dynamic,
+}
+
+/// Parses `file:///a/b`, `file:/a/b` or `file://localhost/a/b` (percent-decoded).
+pub fn resource_dir_from_uri(uri: &str) -> Option<PathBuf> {
+    let rest = uri.strip_prefix("file:")?;
+    let path = if let Some(r) = rest.strip_prefix("//") {
+        &r[r.find('/')?..]
+    } else {
+        rest
+    };
+    let bytes = path.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' && i + 2 < bytes.len() {
+            if let Ok(b) = u8::from_str_radix(&path[i + 1..i + 3], 16) {
+                out.push(b);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    Some(PathBuf::from(String::from_utf8(out).ok()?))
+}
+
+impl Instance {
+    pub fn new(
+        name: &str,
+        resource_location: Option<&str>,
+        logger: Box<dyn LogSink>,
+        logging_on: bool,
+    ) -> Instance {
+        Instance {
+            name: name.to_string(),
+            logger,
+            debug_logging: logging_on,
+            resource_dir: resource_location.and_then(resource_dir_from_uri),
+            record: None,
+            outputs: None,
+            d: Dynamic::initial(),
+        }
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    pub fn phase(&self) -> Phase {
+        self.d.phase
+    }
+
+    /// Logs an error of function `func` and returns `Status::Error`.
+    pub fn error(&mut self, func: &str, message: impl AsRef<str>) -> Status {
+        self.logger.log(
+            Status::Error,
+            "logStatusError",
+            &format!("{func}: {}", message.as_ref()),
+        );
+        Status::Error
+    }
+
+    /// Logs a fatal error (a panic caught at the ABI) and marks the instance unusable.
+    pub fn fatal(&mut self, func: &str, message: &str) -> Status {
+        self.d.phase = Phase::Error;
+        self.logger.log(
+            Status::Fatal,
+            "logStatusFatal",
+            &format!("{func}: {message}"),
+        );
+        Status::Fatal
+    }
+
+    fn debug(&self, message: &str) {
+        if self.debug_logging {
+            self.logger.log(Status::Ok, "logAll", message);
+        }
+    }
+
+    pub fn set_debug_logging(&mut self, on: bool) -> Status {
+        self.debug_logging = on;
+        Status::Ok
+    }
+
+    /// Errors unless the instance is in one of `allowed` phases.
+    fn require(&mut self, func: &str, allowed: &[Phase]) -> Result<(), Status> {
+        if allowed.contains(&self.d.phase) {
+            Ok(())
+        } else {
+            let phase = self.d.phase;
+            Err(self.error(func, format!("not allowed in state {phase:?}")))
+        }
+    }
+
+    pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Status {
+        const F: &str = "fmi2SetupExperiment";
+        if let Err(s) = self.require(F, &[Phase::Instantiated]) {
+            return s;
+        }
+        if !start.is_finite() || stop.is_some_and(|s| !(s.is_finite() && s >= start)) {
+            return self.error(F, format!("startTime = {start}, stopTime = {stop:?}: need finite times with stopTime >= startTime"));
+        }
+        self.d.start_time = start;
+        self.d.time = start;
+        self.d.stop_time = stop;
+        Status::Ok
+    }
+
+    pub fn enter_initialization_mode(&mut self) -> Status {
+        if let Err(s) = self.require("fmi2EnterInitializationMode", &[Phase::Instantiated]) {
+            return s;
+        }
+        self.d.phase = Phase::InitializationMode;
+        self.d.sim = None;
+        Status::Ok
+    }
+
+    /// Builds the simulator from the parameters (and reads the record).
+    fn build(&mut self, func: &str) -> Result<(), Status> {
+        let values = self.d.values.clone();
+        let mut sim = match Simulator::new(&values.params, &values.settings()) {
+            Ok(sim) => sim,
+            Err(e) => return Err(self.error(func, e.to_string())),
+        };
+        sim.advance(
+            0.0,
+            &Excitation {
+                fext: self.d.fext,
+                ..Default::default()
+            },
+        )
+        .map_err(|e| self.error(func, e.to_string()))?;
+        self.load_record(func)?;
+        self.d.sim = Some(sim);
+        self.outputs = None;
+        Ok(())
+    }
+
+    fn load_record(&mut self, func: &str) -> Result<(), Status> {
+        let file = self.d.values.record_file.clone();
+        if file.is_empty() {
+            self.record = None;
+            return Ok(());
+        }
+        if self.record.as_ref().is_some_and(|(f, _)| *f == file) {
+            return Ok(());
+        }
+        let path = Path::new(&file);
+        let path = match (&self.resource_dir, path.is_absolute()) {
+            (Some(dir), false) => dir.join(path),
+            _ => path.to_path_buf(),
+        };
+        match GroundMotion::read(&path, self.d.values.params.g) {
+            Ok(gm) => {
+                self.debug(&format!(
+                    "recordFile: read {} samples from {}",
+                    gm.time.len(),
+                    path.display()
+                ));
+                self.record = Some((file, Arc::new(gm)));
+                Ok(())
+            }
+            Err(e) => Err(self.error(func, format!("recordFile: {e}"))),
+        }
+    }
+
+    pub fn exit_initialization_mode(&mut self) -> Status {
+        const F: &str = "fmi2ExitInitializationMode";
+        if let Err(s) = self.require(F, &[Phase::InitializationMode]) {
+            return s;
+        }
+        if let Err(s) = self.build(F) {
+            return s;
+        }
+        self.d.phase = Phase::StepComplete;
+        Status::Ok
+    }
+
+    pub fn terminate(&mut self) -> Status {
+        if let Err(s) = self.require(
+            "fmi2Terminate",
+            &[Phase::StepComplete, Phase::InitializationMode],
+        ) {
+            return s;
+        }
+        self.d.phase = Phase::Terminated;
+        Status::Ok
+    }
+
+    /// Back to the state after instantiation: default values everywhere.
+    /// (A record already read stays cached under its file name.)
+    pub fn reset(&mut self) -> Status {
+        self.d = Dynamic::initial();
+        self.outputs = None;
+        Status::Ok
+    }
+
+    // ---- variables ----
+
+    fn lookup(&mut self, func: &str, vr: u32) -> Result<Id, Status> {
+        Id::from_vr(vr).ok_or_else(|| self.error(func, format!("unknown value reference {vr}")))
+    }
+
+    /// Checks that variable `id` may be set now.
+    fn settable(&mut self, func: &str, id: Id) -> Result<(), Status> {
+        let phase = self.d.phase;
+        let ok = match id.causality() {
+            Causality::Parameter => {
+                matches!(phase, Phase::Instantiated | Phase::InitializationMode)
+            }
+            Causality::Input => matches!(
+                phase,
+                Phase::Instantiated | Phase::InitializationMode | Phase::StepComplete
+            ),
+            Causality::Output => {
+                return Err(self.error(
+                    func,
+                    format!("{} is an output and cannot be set", name_of(id)),
+                ));
+            }
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(self.error(
+                func,
+                format!("{} cannot be set in state {phase:?}", name_of(id)),
+            ))
+        }
+    }
+
+    fn param_error(&mut self, func: &str, e: ParamError) -> Status {
+        self.error(func, e.to_string())
+    }
+
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        const F: &str = "fmi2SetReal";
+        for (&vr, &x) in vrs.iter().zip(values) {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            if let Err(s) = self.settable(F, id) {
+                return s;
+            }
+            let checked = match id.causality() {
+                Causality::Parameter => check_scalar(&name_of(id), x),
+                _ if x.is_finite() => Ok(()),
+                _ => check_scalar(&name_of(id), x),
+            };
+            if let Err(e) = checked {
+                return self.param_error(F, e);
+            }
+            let v = &mut self.d.values;
+            match id {
+                Id::Mp => v.params.mp = x,
+                Id::Tp => v.params.tp = x,
+                Id::Zeta => v.params.zeta = x,
+                Id::G => v.params.g = x,
+                Id::RecordScale => v.record_scale = x,
+                Id::MaxStep => v.max_step = x,
+                Id::Alpha(j) => v.params.alpha[j - 1] = x,
+                Id::Mus(j) => v.params.mus[j - 1] = x,
+                Id::Muk(j) => v.params.muk[j - 1] = x,
+                Id::Ag => self.d.ag = x,
+                Id::Fext => self.d.fext = x,
+                _ => return self.error(F, format!("{} is not a Real", name_of(id))),
+            }
+            if id.causality() == Causality::Parameter {
+                self.d.sim = None;
+            }
+        }
+        Status::Ok
+    }
+
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        const F: &str = "fmi2SetInteger";
+        for (&vr, &x) in vrs.iter().zip(values) {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            if let Err(s) = self.settable(F, id) {
+                return s;
+            }
+            match id {
+                Id::NBlocks if (0..=MAX_BLOCKS as i32).contains(&x) => {
+                    self.d.values.params.n_blocks = x as usize
+                }
+                Id::NBlocks => return self.error(F, format!("nBlocks = {x} is not allowed: it must be an integer from 0 to {MAX_BLOCKS}")),
+                Id::Solver if x == 1 || x == 2 => self.d.values.solver = x,
+                Id::Solver => return self.error(F, format!("solver = {x} is not allowed: it must be 1 (event-located RK4) or 2 (step-end switching)")),
+                _ => return self.error(F, format!("{} is not an Integer", name_of(id))),
+            }
+            self.d.sim = None;
+        }
+        Status::Ok
+    }
+
+    pub fn set_boolean(&mut self, vrs: &[u32], _values: &[i32]) -> Status {
+        const F: &str = "fmi2SetBoolean";
+        for &vr in vrs {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            if let Err(s) = self.settable(F, id) {
+                return s;
+            }
+            return self.error(F, format!("{} is not a settable Boolean", name_of(id)));
+        }
+        Status::Ok
+    }
+
+    pub fn set_string(&mut self, vrs: &[u32], values: &[String]) -> Status {
+        const F: &str = "fmi2SetString";
+        for (&vr, x) in vrs.iter().zip(values) {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            if let Err(s) = self.settable(F, id) {
+                return s;
+            }
+            match id {
+                Id::RecordFile => self.d.values.record_file = x.clone(),
+                _ => return self.error(F, format!("{} is not a String", name_of(id))),
+            }
+            self.d.sim = None;
+        }
+        Status::Ok
+    }
+
+    /// Outputs of the current state; in initialization mode the simulator
+    /// is built on demand from the parameters set so far.
+    fn current_outputs(&mut self, func: &str) -> Result<&Outputs, Status> {
+        if self.d.sim.is_none() {
+            if self.d.phase != Phase::InitializationMode {
+                return Err(self.error(func, "outputs are not available before initialization"));
+            }
+            self.build(func)?;
+        }
+        if self.outputs.is_none() {
+            self.outputs = Some(self.d.sim.as_ref().expect("built above").outputs());
+        }
+        Ok(self.outputs.as_ref().expect("set above"))
+    }
+
+    fn readable(&mut self, func: &str) -> Result<(), Status> {
+        self.require(
+            func,
+            &[
+                Phase::InitializationMode,
+                Phase::StepComplete,
+                Phase::Terminated,
+                Phase::Error,
+            ],
+        )
+    }
+
+    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Status {
+        const F: &str = "fmi2GetReal";
+        if let Err(s) = self.readable(F) {
+            return s;
+        }
+        for (&vr, slot) in vrs.iter().zip(out.iter_mut()) {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            let v = &self.d.values;
+            let p = &v.params;
+            let block = |j: usize, xs: &[f64; MAX_BLOCKS]| xs[j - 1];
+            *slot = match id {
+                Id::Mp => p.mp,
+                Id::Tp => p.tp,
+                Id::Zeta => p.zeta,
+                Id::G => p.g,
+                Id::RecordScale => v.record_scale,
+                Id::MaxStep => v.max_step,
+                Id::Alpha(j) => block(j, &p.alpha),
+                Id::Mus(j) => block(j, &p.mus),
+                Id::Muk(j) => block(j, &p.muk),
+                Id::Ag => self.d.ag,
+                Id::Fext => self.d.fext,
+                _ => {
+                    let o = match self.current_outputs(F) {
+                        Ok(o) => o,
+                        Err(s) => return s,
+                    };
+                    match id {
+                        Id::Up => o.up,
+                        Id::Vp => o.vp,
+                        Id::ApAbs => o.ap_abs,
+                        Id::BaseShear => o.base_shear,
+                        Id::PeakUp => o.peak_up,
+                        Id::PeakApAbs => o.peak_ap_abs,
+                        Id::Einput => o.e_input,
+                        Id::Ekinetic => o.e_kinetic,
+                        Id::Estrain => o.e_strain,
+                        Id::Eviscous => o.e_viscous,
+                        Id::Efriction => o.e_friction,
+                        Id::Ub(j) => block(j, &o.ub),
+                        Id::Vb(j) => block(j, &o.vb),
+                        Id::Slip(j) => block(j, &o.slip),
+                        Id::AbAbs(j) => block(j, &o.ab_abs),
+                        Id::F(j) => block(j, &o.force),
+                        Id::PeakSlip(j) => block(j, &o.peak_slip),
+                        _ => return self.error(F, format!("{} is not a Real", name_of(id))),
+                    }
+                }
+            };
+        }
+        Status::Ok
+    }
+
+    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
+        const F: &str = "fmi2GetInteger";
+        if let Err(s) = self.readable(F) {
+            return s;
+        }
+        for (&vr, slot) in vrs.iter().zip(out.iter_mut()) {
+            *slot = match self.lookup(F, vr) {
+                Ok(Id::NBlocks) => self.d.values.params.n_blocks as i32,
+                Ok(Id::Solver) => self.d.values.solver,
+                Ok(Id::NEvents) => match self.current_outputs(F) {
+                    Ok(o) => o.n_events.min(i32::MAX as u64) as i32,
+                    Err(s) => return s,
+                },
+                Ok(id) => return self.error(F, format!("{} is not an Integer", name_of(id))),
+                Err(s) => return s,
+            };
+        }
+        Status::Ok
+    }
+
+    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
+        const F: &str = "fmi2GetBoolean";
+        if let Err(s) = self.readable(F) {
+            return s;
+        }
+        for (&vr, slot) in vrs.iter().zip(out.iter_mut()) {
+            *slot = match self.lookup(F, vr) {
+                Ok(Id::Stuck(j)) => match self.current_outputs(F) {
+                    Ok(o) => i32::from(o.stuck[j - 1]),
+                    Err(s) => return s,
+                },
+                Ok(id) => return self.error(F, format!("{} is not a Boolean", name_of(id))),
+                Err(s) => return s,
+            };
+        }
+        Status::Ok
+    }
+
+    pub fn get_string(&mut self, vrs: &[u32]) -> Result<Vec<String>, Status> {
+        const F: &str = "fmi2GetString";
+        self.readable(F)?;
+        vrs.iter()
+            .map(|&vr| match self.lookup(F, vr)? {
+                Id::RecordFile => Ok(self.d.values.record_file.clone()),
+                id => Err(self.error(F, format!("{} is not a String", name_of(id)))),
+            })
+            .collect()
+    }
+
+    /// `fmi2SetRealInputDerivatives`, order 1: the slope of an input over the
+    /// next step (reset to zero after every step: without it the input is held).
+    pub fn set_input_derivatives(&mut self, vrs: &[u32], orders: &[i32], values: &[f64]) -> Status {
+        const F: &str = "fmi2SetRealInputDerivatives";
+        if let Err(s) = self.require(
+            F,
+            &[
+                Phase::Instantiated,
+                Phase::InitializationMode,
+                Phase::StepComplete,
+            ],
+        ) {
+            return s;
+        }
+        for ((&vr, &order), &x) in vrs.iter().zip(orders).zip(values) {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            if order != 1 {
+                return self.error(
+                    F,
+                    format!(
+                        "derivative order {order} of {} is not supported: only order 1",
+                        name_of(id)
+                    ),
+                );
+            }
+            if !x.is_finite() {
+                return self.error(
+                    F,
+                    format!(
+                        "der({}) = {x} is not allowed: it must be finite",
+                        name_of(id)
+                    ),
+                );
+            }
+            match id {
+                Id::Ag => self.d.der_ag = x,
+                Id::Fext => self.d.der_fext = x,
+                _ => return self.error(F, format!("{} is not a Real input", name_of(id))),
+            }
+        }
+        Status::Ok
+    }
+
+    pub fn do_step(&mut self, t: f64, h: f64) -> Status {
+        const F: &str = "fmi2DoStep";
+        if let Err(s) = self.require(F, &[Phase::StepComplete]) {
+            return s;
+        }
+        let now = self.d.time;
+        if !t.is_finite() || (t - now).abs() > 1e-9 * now.abs().max(1.0) {
+            return self.error(
+                F,
+                format!("currentCommunicationPoint = {t} does not match the FMU's time {now}"),
+            );
+        }
+        if !(h >= 0.0 && h.is_finite()) {
+            return self.error(
+                F,
+                format!("communicationStepSize = {h} is not allowed: it must be finite and >= 0"),
+            );
+        }
+        if let Some(stop) = self.d.stop_time {
+            if t + h > stop + 1e-9 * stop.abs().max(1.0) {
+                return self.error(
+                    F,
+                    format!("stepping to {} would pass stopTime = {stop}", t + h),
+                );
+            }
+        }
+        let extra = Excitation {
+            ag: self.d.ag,
+            ag_rate: self.d.der_ag,
+            fext: self.d.fext,
+            fext_rate: self.d.der_fext,
+        };
+        let sim = self.d.sim.as_mut().expect("built at initialization");
+        let t_end = (t + h - self.d.start_time).max(sim.time());
+        let result = match &self.record {
+            Some((_, gm)) => {
+                record::advance_with_record(sim, t_end, gm, self.d.values.record_scale, &extra)
+            }
+            None => sim.advance(t_end, &extra),
+        };
+        self.outputs = None;
+        self.d.der_ag = 0.0;
+        self.d.der_fext = 0.0;
+        match result {
+            Ok(()) => {
+                self.d.time = t + h;
+                Status::Ok
+            }
+            Err(e) => {
+                self.d.phase = Phase::Error;
+                self.error(F, e.to_string())
+            }
+        }
+    }
+
+    /// `fmi2LastSuccessfulTime`.
+    pub fn last_successful_time(&self) -> f64 {
+        self.d.time
+    }
+
+    // ---- saved states ----
+
+    pub fn save(&mut self) -> Result<SavedState, Status> {
+        self.require(
+            "fmi2GetFMUstate",
+            &[
+                Phase::Instantiated,
+                Phase::InitializationMode,
+                Phase::StepComplete,
+                Phase::Terminated,
+            ],
+        )?;
+        Ok(SavedState(self.d.clone()))
+    }
+
+    pub fn restore(&mut self, state: &SavedState) -> Status {
+        const F: &str = "fmi2SetFMUstate";
+        if let Err(s) = self.require(
+            F,
+            &[
+                Phase::Instantiated,
+                Phase::InitializationMode,
+                Phase::StepComplete,
+                Phase::Terminated,
+                Phase::Error,
+            ],
+        ) {
+            return s;
+        }
+        self.d = state.0.clone();
+        self.outputs = None;
+        if self.d.sim.is_some() {
+            if let Err(s) = self.load_record(F) {
+                return s;
+            }
+        }
+        Status::Ok
+    }
+
+    /// The explicit, versioned byte format of a saved state.
+    pub fn serialize(state: &SavedState) -> Vec<u8> {
+        let d = &state.0;
+        let mut w = ByteWriter::default();
+        w.buf.extend_from_slice(STATE_MAGIC);
+        w.u32(STATE_VERSION);
+        w.u8(d.phase as u8);
+        w.f64s(&[d.start_time, d.stop_time.unwrap_or(f64::NAN), d.time]);
+        let v = &d.values;
+        w.str(&v.record_file);
+        w.f64s(&[v.record_scale, v.max_step]);
+        w.u32(v.solver as u32);
+        w.f64s(&[d.ag, d.fext, d.der_ag, d.der_fext]);
+        // The parameters travel with the simulator when it exists; before
+        // initialization they are written on their own.
+        match &d.sim {
+            Some(sim) => {
+                w.u8(1);
+                sim.write_state(&mut w);
+            }
+            None => {
+                w.u8(0);
+                let p = &v.params;
+                w.u32(p.n_blocks as u32);
+                w.f64s(&[p.mp, p.tp, p.zeta, p.g]);
+                w.f64s(&p.alpha);
+                w.f64s(&p.mus);
+                w.f64s(&p.muk);
+            }
+        }
+        w.buf
+    }
+
+    pub fn deserialize(bytes: &[u8]) -> Result<SavedState, SnapshotError> {
+        let magic = bytes.get(..8).ok_or("the saved state is truncated")?;
+        if magic != STATE_MAGIC {
+            return Err("not a StackedLiveLoad state".into());
+        }
+        let mut r = ByteReader::new(&bytes[8..]);
+        let version = r.u32()?;
+        if version != STATE_VERSION {
+            return Err(format!(
+                "state format version {version} is not supported (this FMU reads {STATE_VERSION})"
+            ));
+        }
+        let phase = match r.u8()? {
+            0 => Phase::Instantiated,
+            1 => Phase::InitializationMode,
+            2 => Phase::StepComplete,
+            3 => Phase::Terminated,
+            4 => Phase::Error,
+            x => return Err(format!("unknown phase {x}")),
+        };
+        let (start_time, stop, time) = (r.f64()?, r.f64()?, r.f64()?);
+        let mut values = ParameterValues {
+            record_file: r.str()?,
+            record_scale: r.f64()?,
+            max_step: r.f64()?,
+            solver: r.u32()? as i32,
+            ..ParameterValues::default()
+        };
+        let (ag, fext, der_ag, der_fext) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
+        let sim = match r.u8()? {
+            1 => {
+                let sim = Simulator::read_state(&mut r)?;
+                values.params = sim.params().clone();
+                Some(sim)
+            }
+            _ => {
+                let p = &mut values.params;
+                p.n_blocks = r.u32()? as usize;
+                let mut head = [0.0; 4];
+                r.f64s(&mut head)?;
+                [p.mp, p.tp, p.zeta, p.g] = head;
+                r.f64s(&mut p.alpha)?;
+                r.f64s(&mut p.mus)?;
+                r.f64s(&mut p.muk)?;
+                None
+            }
+        };
+        if !r.is_empty() {
+            return Err("the saved state has trailing bytes".into());
+        }
+        Ok(SavedState(Dynamic {
+            phase,
+            start_time,
+            stop_time: (!stop.is_nan()).then_some(stop),
+            time,
+            values,
+            ag,
+            fext,
+            der_ag,
+            der_fext,
+            sim,
+        }))
+    }
+}
+
+fn name_of(id: Id) -> String {
+    id.name()
+}
+
+/// A sink that drops everything.
+pub struct NullSink;
+
+impl LogSink for NullSink {
+    fn log(&self, _: Status, _: &str, _: &str) {}
+}

@@ -1,0 +1,199 @@
+//! `modelDescription.xml`, generated with quick-xml from the variable table.
+
+use crate::fmi2::GUID;
+use crate::variables::{table, Causality, Kind, Variable, TYPES, UNITS};
+use quick_xml::events::{BytesDecl, Event};
+use quick_xml::Writer;
+use std::io;
+
+/// The model identifier: the shared library's and the FMU's name.
+pub const MODEL_IDENTIFIER: &str = "StackedLiveLoad";
+
+/// The whole model description, UTF-8, deterministic.
+pub fn model_description() -> String {
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    write(&mut w).expect("writing to memory cannot fail");
+    let mut text = String::from_utf8(w.into_inner()).expect("UTF-8");
+    text.push('\n');
+    text
+}
+
+fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    let description =
+        "Linear SDOF structure carrying a stack of up to 8 rigid blocks that stick or slide with \
+                       Coulomb friction, under ground acceleration; event-located RK4";
+    let tool = format!("stacked-live-load {}", env!("CARGO_PKG_VERSION"));
+    let variables = table();
+    w.create_element("fmiModelDescription")
+        .with_attributes([
+            ("fmiVersion", "2.0"),
+            ("modelName", MODEL_IDENTIFIER),
+            ("guid", GUID),
+            ("description", description),
+            ("generationTool", tool.as_str()),
+            ("variableNamingConvention", "structured"),
+            ("numberOfEventIndicators", "0"),
+        ])
+        .write_inner_content(|w| {
+            w.create_element("CoSimulation")
+                .with_attributes([
+                    ("modelIdentifier", MODEL_IDENTIFIER),
+                    ("canHandleVariableCommunicationStepSize", "true"),
+                    ("canInterpolateInputs", "true"),
+                    ("maxOutputDerivativeOrder", "0"),
+                    ("canGetAndSetFMUstate", "true"),
+                    ("canSerializeFMUstate", "true"),
+                    ("canNotUseMemoryManagementFunctions", "true"),
+                    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+                    ("providesDirectionalDerivative", "false"),
+                ])
+                .write_empty()?;
+            write_units(w)?;
+            write_types(w)?;
+            w.create_element("LogCategories").write_inner_content(|w| {
+                for (name, text) in [
+                    (
+                        "logStatusError",
+                        "Errors: bad input, illegal calls, unreadable records",
+                    ),
+                    (
+                        "logStatusFatal",
+                        "Internal errors caught at the C interface",
+                    ),
+                    ("logAll", "Diagnostics, when debug logging is on"),
+                ] {
+                    w.create_element("Category")
+                        .with_attributes([("name", name), ("description", text)])
+                        .write_empty()?;
+                }
+                Ok(())
+            })?;
+            w.create_element("DefaultExperiment")
+                .with_attributes([
+                    ("startTime", "0.0"),
+                    ("stopTime", "20.0"),
+                    ("stepSize", "0.005"),
+                ])
+                .write_empty()?;
+            w.create_element("ModelVariables")
+                .write_inner_content(|w| {
+                    for v in &variables {
+                        write_variable(w, v)?;
+                    }
+                    Ok(())
+                })?;
+            write_structure(w, &variables)
+        })?;
+    Ok(())
+}
+
+fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+    w.create_element("UnitDefinitions")
+        .write_inner_content(|w| {
+            for &(name, kg, m, s) in UNITS {
+                let exponents: Vec<(&str, String)> = [("kg", kg), ("m", m), ("s", s)]
+                    .into_iter()
+                    .filter(|&(_, e)| e != 0)
+                    .map(|(k, e)| (k, e.to_string()))
+                    .collect();
+                w.create_element("Unit")
+                    .with_attribute(("name", name))
+                    .write_inner_content(|w| {
+                        w.create_element("BaseUnit")
+                            .with_attributes(exponents.iter().map(|(k, e)| (*k, e.as_str())))
+                            .write_empty()?;
+                        Ok(())
+                    })?;
+            }
+            Ok(())
+        })?;
+    Ok(())
+}
+
+fn write_types(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+    w.create_element("TypeDefinitions")
+        .write_inner_content(|w| {
+            for &(name, quantity, unit) in TYPES {
+                w.create_element("SimpleType")
+                    .with_attribute(("name", name))
+                    .write_inner_content(|w| {
+                        let mut attrs = vec![("unit", unit)];
+                        if !quantity.is_empty() {
+                            attrs.insert(0, ("quantity", quantity));
+                        }
+                        w.create_element("Real")
+                            .with_attributes(attrs)
+                            .write_empty()?;
+                        Ok(())
+                    })?;
+            }
+            Ok(())
+        })?;
+    Ok(())
+}
+
+fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
+    let kind = v.id.kind();
+    let (causality, variability) = match (v.id.causality(), kind) {
+        (Causality::Parameter, _) => ("parameter", "fixed"),
+        (Causality::Input, _) => ("input", "continuous"),
+        (Causality::Output, Kind::Real) => ("output", "continuous"),
+        (Causality::Output, _) => ("output", "discrete"),
+    };
+    let vr = v.id.vr().to_string();
+    w.create_element("ScalarVariable")
+        .with_attributes([
+            ("name", v.name.as_str()),
+            ("valueReference", vr.as_str()),
+            ("description", v.description.as_str()),
+            ("causality", causality),
+            ("variability", variability),
+        ])
+        .write_inner_content(|w| {
+            let element = match kind {
+                Kind::Real => "Real",
+                Kind::Integer => "Integer",
+                Kind::Boolean => "Boolean",
+                Kind::String => "String",
+            };
+            let mut attrs: Vec<(&str, &str)> = vec![];
+            if let Some(t) = v.declared_type {
+                attrs.push(("declaredType", t));
+            }
+            if let Some(s) = &v.start {
+                attrs.push(("start", s.as_str()));
+            }
+            w.create_element(element)
+                .with_attributes(attrs)
+                .write_empty()?;
+            Ok(())
+        })?;
+    Ok(())
+}
+
+/// Every output is listed in `Outputs` and, being calculated at
+/// initialization, in `InitialUnknowns` (indices are 1-based positions).
+fn write_structure(w: &mut Writer<Vec<u8>>, variables: &[Variable]) -> io::Result<()> {
+    let outputs: Vec<String> = variables
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.id.causality() == Causality::Output)
+        .map(|(i, _)| (i + 1).to_string())
+        .collect();
+    w.create_element("ModelStructure")
+        .write_inner_content(|w| {
+            for section in ["Outputs", "InitialUnknowns"] {
+                w.create_element(section).write_inner_content(|w| {
+                    for index in &outputs {
+                        w.create_element("Unknown")
+                            .with_attribute(("index", index.as_str()))
+                            .write_empty()?;
+                    }
+                    Ok(())
+                })?;
+            }
+            Ok(())
+        })?;
+    Ok(())
+}

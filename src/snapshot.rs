@@ -1,0 +1,82 @@
+//! An explicit little-endian byte format for saved states: no raw memory,
+//! no pointers; every field written and read in a fixed order.
+
+/// Appends fields to a byte buffer.
+#[derive(Default)]
+pub struct ByteWriter {
+    pub buf: Vec<u8>,
+}
+
+impl ByteWriter {
+    pub fn u8(&mut self, x: u8) {
+        self.buf.push(x);
+    }
+    pub fn u32(&mut self, x: u32) {
+        self.buf.extend_from_slice(&x.to_le_bytes());
+    }
+    pub fn u64(&mut self, x: u64) {
+        self.buf.extend_from_slice(&x.to_le_bytes());
+    }
+    pub fn f64(&mut self, x: f64) {
+        self.buf.extend_from_slice(&x.to_le_bytes());
+    }
+    pub fn f64s(&mut self, xs: &[f64]) {
+        xs.iter().for_each(|&x| self.f64(x));
+    }
+    pub fn str(&mut self, s: &str) {
+        self.u32(s.len() as u32);
+        self.buf.extend_from_slice(s.as_bytes());
+    }
+}
+
+/// Reads fields back; every read fails cleanly past the end.
+pub struct ByteReader<'a> {
+    bytes: &'a [u8],
+}
+
+/// A saved state that cannot be read.
+pub type SnapshotError = String;
+
+impl<'a> ByteReader<'a> {
+    pub fn new(bytes: &'a [u8]) -> Self {
+        ByteReader { bytes }
+    }
+    fn take<const N: usize>(&mut self) -> Result<[u8; N], SnapshotError> {
+        if self.bytes.len() < N {
+            return Err("the saved state is truncated".into());
+        }
+        let (head, rest) = self.bytes.split_at(N);
+        self.bytes = rest;
+        Ok(head.try_into().expect("length checked"))
+    }
+    pub fn u8(&mut self) -> Result<u8, SnapshotError> {
+        Ok(self.take::<1>()?[0])
+    }
+    pub fn u32(&mut self) -> Result<u32, SnapshotError> {
+        Ok(u32::from_le_bytes(self.take()?))
+    }
+    pub fn u64(&mut self) -> Result<u64, SnapshotError> {
+        Ok(u64::from_le_bytes(self.take()?))
+    }
+    pub fn f64(&mut self) -> Result<f64, SnapshotError> {
+        Ok(f64::from_le_bytes(self.take()?))
+    }
+    pub fn f64s(&mut self, out: &mut [f64]) -> Result<(), SnapshotError> {
+        for x in out.iter_mut() {
+            *x = self.f64()?;
+        }
+        Ok(())
+    }
+    pub fn str(&mut self) -> Result<String, SnapshotError> {
+        let n = self.u32()? as usize;
+        if self.bytes.len() < n {
+            return Err("the saved state is truncated".into());
+        }
+        let (head, rest) = self.bytes.split_at(n);
+        self.bytes = rest;
+        String::from_utf8(head.to_vec()).map_err(|_| "a saved string is not UTF-8".into())
+    }
+    pub fn is_empty(&self) -> bool {
+        self.bytes.is_empty()
+    }
+}
