@@ -268,48 +268,89 @@ pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
 
 // ---------------------------------------------------------------- get/set
 
-macro_rules! get_values {
-    ($fname:ident, $name:literal, $t:ty, $method:ident) => {
-        #[no_mangle]
-        pub unsafe extern "C" fn $fname(
-            c: fmi2Component,
-            vr: *const fmi2ValueReference,
-            nvr: usize,
-            value: *mut $t,
-        ) -> fmi2Status {
-            with(c, $name, |comp| {
-                match (slice(vr, nvr), slice_mut(value, nvr)) {
-                    (Some(vr), Some(value)) => comp.instance.$method(vr, value),
-                    _ => null_argument(&mut comp.instance, $name),
-                }
-            })
-        }
-    };
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    const F: &str = "fmi2GetReal";
+    with(c, F, |comp| match (slice(vr, nvr), slice_mut(value, nvr)) {
+        (Some(vr), Some(value)) => comp.instance.get_real(vr, value),
+        _ => null_argument(&mut comp.instance, F),
+    })
 }
 
-macro_rules! set_values {
-    ($fname:ident, $name:literal, $t:ty, $method:ident) => {
-        #[no_mangle]
-        pub unsafe extern "C" fn $fname(
-            c: fmi2Component,
-            vr: *const fmi2ValueReference,
-            nvr: usize,
-            value: *const $t,
-        ) -> fmi2Status {
-            with(c, $name, |comp| match (slice(vr, nvr), slice(value, nvr)) {
-                (Some(vr), Some(value)) => comp.instance.$method(vr, value),
-                _ => null_argument(&mut comp.instance, $name),
-            })
-        }
-    };
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    const F: &str = "fmi2GetInteger";
+    with(c, F, |comp| match (slice(vr, nvr), slice_mut(value, nvr)) {
+        (Some(vr), Some(value)) => comp.instance.get_integer(vr, value),
+        _ => null_argument(&mut comp.instance, F),
+    })
 }
 
-get_values!(fmi2GetReal, "fmi2GetReal", fmi2Real, get_real);
-get_values!(fmi2GetInteger, "fmi2GetInteger", fmi2Integer, get_integer);
-get_values!(fmi2GetBoolean, "fmi2GetBoolean", fmi2Boolean, get_boolean);
-set_values!(fmi2SetReal, "fmi2SetReal", fmi2Real, set_real);
-set_values!(fmi2SetInteger, "fmi2SetInteger", fmi2Integer, set_integer);
-set_values!(fmi2SetBoolean, "fmi2SetBoolean", fmi2Boolean, set_boolean);
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    const F: &str = "fmi2GetBoolean";
+    with(c, F, |comp| match (slice(vr, nvr), slice_mut(value, nvr)) {
+        (Some(vr), Some(value)) => comp.instance.get_boolean(vr, value),
+        _ => null_argument(&mut comp.instance, F),
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    const F: &str = "fmi2SetReal";
+    with(c, F, |comp| match (slice(vr, nvr), slice(value, nvr)) {
+        (Some(vr), Some(value)) => comp.instance.set_real(vr, value),
+        _ => null_argument(&mut comp.instance, F),
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Integer,
+) -> fmi2Status {
+    const F: &str = "fmi2SetInteger";
+    with(c, F, |comp| match (slice(vr, nvr), slice(value, nvr)) {
+        (Some(vr), Some(value)) => comp.instance.set_integer(vr, value),
+        _ => null_argument(&mut comp.instance, F),
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
+    const F: &str = "fmi2SetBoolean";
+    with(c, F, |comp| match (slice(vr, nvr), slice(value, nvr)) {
+        (Some(vr), Some(value)) => comp.instance.set_boolean(vr, value),
+        _ => null_argument(&mut comp.instance, F),
+    })
+}
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetString(
