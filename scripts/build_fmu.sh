@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Builds the release library and writes target/fmu/StackedLiveLoad.fmu:
-# modelDescription.xml, binaries/linux64/StackedLiveLoad.so, documentation/.
+# modelDescription.xml, binaries/linux64/StackedLiveLoad.so, documentation/,
+# resources/default_record.csv (the embedded default ground motion).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release --lib --bin model_description
+cargo build --release --lib --bin model_description --bin default_record
 stage=target/fmu/stage
 rm -rf "$stage"
 mkdir -p "$stage/binaries/linux64" "$stage/documentation" "$stage/resources"
@@ -15,6 +16,7 @@ cmp -s "$stage/modelDescription.xml" modelDescription/modelDescription.xml || {
 }
 cp target/release/libstacked_live_load.so "$stage/binaries/linux64/StackedLiveLoad.so"
 cp README.md "$stage/documentation/README.md"
+./target/release/default_record > "$stage/resources/default_record.csv"
 printf '<html><body><p>See <a href="README.md">README.md</a>.</p></body></html>\n' > "$stage/documentation/index.html"
 python3 - "$stage" target/fmu/StackedLiveLoad.fmu <<'PY'
 import os, sys, zipfile

@@ -1,0 +1,198 @@
+"""Shared helpers for the scripts and tests: build or find the FMU, load it
+once with fmpy, and run a record through it.
+
+    from sll import Model
+    with Model() as m:
+        result = m.run(record="../shared/ground_motions/RSN6_IMPVALL.I_I-ELC180.AT2",
+                       params={"alpha[1]": 0.3}, dt=0.01)
+    result["peaks"]["peakUp"], result["time"], result["up"]
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+from fmpy.logging import addLoggerProxy
+from ctypes import byref
+
+ROOT = Path(__file__).resolve().parents[1]
+FMU_PATH = ROOT / "target" / "fmu" / "StackedLiveLoad.fmu"
+DEFAULT_RECORD = "default_record.csv"  # in the FMU's resources folder
+MAX_BLOCKS = 8
+
+
+def build_fmu() -> Path:
+    """Builds target/fmu/StackedLiveLoad.fmu (cargo, release) and returns its path."""
+    subprocess.run(["bash", str(ROOT / "scripts" / "build_fmu.sh")], check=True,
+                   stdout=subprocess.DEVNULL)
+    return FMU_PATH
+
+
+def fmu_path() -> Path:
+    return FMU_PATH if FMU_PATH.exists() else build_fmu()
+
+
+def read_record(path: str | Path, g: float = 9.81) -> tuple[np.ndarray, np.ndarray]:
+    """(time, accel in m/s2) of a PEER .AT2 (units of g) or CSV `time,accel` file,
+    read by the same rules as the FMU: AT2 header line 4 gives NPTS and DT in either
+    PEER form, the value count must equal NPTS, the first value is at t = 0."""
+    path = Path(path)
+    text = path.read_bytes().decode("latin-1").replace("\r", " ")
+    lines = text.split("\n")
+    if path.suffix.lower() == ".at2":
+        header = lines[3] if len(lines) > 3 else ""
+        m = re.search(r"NPTS\s*=\s*([0-9.]+)\s*,?\s*DT\s*=\s*([0-9.Ee+-]+)", header, re.I)
+        if m:
+            npts, dt = int(float(m.group(1))), float(m.group(2))
+        else:
+            nums = re.findall(r"[-+]?[0-9]*\.?[0-9]+(?:[Ee][-+]?[0-9]+)?", header)
+            if len(nums) < 2:
+                raise ValueError(f"{path}:4: expected NPTS and DT in header line 4")
+            npts, dt = int(float(nums[0])), float(nums[1])
+        values = np.array([float(x) for line in lines[4:] for x in line.split()])
+        if len(values) != npts:
+            raise ValueError(f"{path}: header line 4 says NPTS = {npts} but the file holds {len(values)} values")
+        return np.arange(npts) * dt, values * g
+    rows = []
+    for no, line in enumerate(lines, 1):
+        line = line.strip()
+        if not line or line.startswith("#"):
+            continue
+        fields = [f.strip() for f in line.split(",")]
+        try:
+            rows.append([float(f) for f in fields])
+        except ValueError:
+            if not rows and len(fields) == 2:
+                continue  # header
+            raise ValueError(f"{path}:{no}: expected two numbers `time,accel`, found `{line}`")
+        if len(rows[-1]) != 2:
+            raise ValueError(f"{path}:{no}: expected two numbers `time,accel`, found `{line}`")
+    data = np.array(rows)
+    return data[:, 0], data[:, 1]
+
+
+class Model:
+    """The FMU, extracted and loaded once; `run` resets it between runs."""
+
+    def __init__(self, fmu: str | Path | None = None, logger=None):
+        self.fmu = Path(fmu) if fmu else fmu_path()
+        self.md = read_model_description(str(self.fmu))
+        self.unzipdir = extract(str(self.fmu), tempfile.mkdtemp(prefix="sll_fmu_"))
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        self.messages: list[str] = []
+
+        def log(component, instance, status, category, message):
+            text = message.decode() if isinstance(message, bytes) else str(message)
+            self.messages.append(text)
+            if logger:
+                logger(status, text)
+
+        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
+                               modelIdentifier=self.md.coSimulation.modelIdentifier,
+                               instanceName="sll")
+        # fmpy's native proxy formats the variadic message ("%s", text) for us.
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(log)
+        addLoggerProxy(byref(self.callbacks))
+        self.slave.instantiate(callbacks=self.callbacks, loggingOn=False)
+        self.fresh = True
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self):
+        try:
+            self.slave.freeInstance()
+        finally:
+            shutil.rmtree(self.unzipdir, ignore_errors=True)
+
+    def vr(self, name: str) -> int:
+        return self.vars[name].valueReference
+
+    def set(self, name: str, value):
+        v = self.vars[name]
+        if v.type == "Real":
+            self.slave.setReal([v.valueReference], [float(value)])
+        elif v.type == "Integer":
+            self.slave.setInteger([v.valueReference], [int(value)])
+        elif v.type == "Boolean":
+            self.slave.setBoolean([v.valueReference], [bool(value)])
+        else:
+            self.slave.setString([v.valueReference], [str(value)])
+
+    def output_names(self, n_blocks: int) -> list[str]:
+        names = ["up", "vp", "apAbs", "baseShear"]
+        for q in ("ub", "vb", "slip", "abAbs", "F", "stuck"):
+            names += [f"{q}[{j}]" for j in range(1, n_blocks + 1)]
+        return names + ["Einput", "Ekinetic", "Estrain", "Eviscous", "Efriction", "nEvents"]
+
+    def peaks(self, n_blocks: int) -> dict:
+        names = ["peakUp", "peakApAbs", "Einput", "Ekinetic", "Estrain", "Eviscous", "Efriction"]
+        names += [f"peakSlip[{j}]" for j in range(1, n_blocks + 1)]
+        out = dict(zip(names, self.slave.getReal([self.vr(n) for n in names])))
+        out["nEvents"] = self.slave.getInteger([self.vr("nEvents")])[0]
+        return out
+
+    def run(self, record: str | Path | None = None, params: dict | None = None,
+            dt: float | None = None, stop: float | None = None) -> dict:
+        """Runs `record` (a file path; None: the FMU's embedded default) with the
+        given parameters. With `dt`, steps every `dt` and returns time histories;
+        without, covers the whole record in one fmi2DoStep (peaks only)."""
+        params = dict(params or {})
+        record_file = str(Path(record).resolve()) if record else DEFAULT_RECORD
+        if record:
+            t, _ = read_record(record, float(params.get("g", 9.81)))
+        else:
+            t, _ = read_record(Path(self.unzipdir) / "resources" / DEFAULT_RECORD)
+        stop = float(t[-1]) if stop is None else stop
+        if not self.fresh:
+            self.slave.reset()
+        self.fresh = False
+        self.messages.clear()
+        s = self.slave
+        s.setupExperiment(startTime=0.0, stopTime=stop)
+        s.enterInitializationMode()
+        self.set("recordFile", record_file)
+        for name, value in params.items():
+            self.set(name, value)
+        s.exitInitializationMode()
+        n_blocks = s.getInteger([self.vr("nBlocks")])[0]
+        result = {"params": {"recordFile": record_file, **params}, "nBlocks": n_blocks}
+        if dt is None:
+            s.doStep(0.0, stop)
+        else:
+            names = self.output_names(n_blocks)
+            kinds = {n: self.vars[n].type for n in names}
+            real = [n for n in names if kinds[n] == "Real"]
+            boolean = [n for n in names if kinds[n] == "Boolean"]
+            real_vr = [self.vr(n) for n in real]
+            bool_vr = [self.vr(n) for n in boolean]
+            n = int(round(stop / dt))
+            times = np.arange(n + 1) * dt
+            rows = np.zeros((n + 1, len(real)))
+            flags = np.zeros((n + 1, len(boolean)), dtype=bool)
+            rows[0] = s.getReal(real_vr)
+            flags[0] = s.getBoolean(bool_vr) if bool_vr else []
+            for i in range(n):
+                s.doStep(times[i], times[i + 1] - times[i])
+                rows[i + 1] = s.getReal(real_vr)
+                if bool_vr:
+                    flags[i + 1] = s.getBoolean(bool_vr)
+            result["time"] = times
+            for k, name in enumerate(real):
+                result[name] = rows[:, k]
+            for k, name in enumerate(boolean):
+                result[name] = flags[:, k]
+        result["peaks"] = self.peaks(n_blocks)
+        s.terminate()
+        return result
