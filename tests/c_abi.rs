@@ -5,11 +5,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// The cdylib next to this test binary (target/<profile>/).
+/// The cdylib that this `cargo test` built: rustc emits it beside the rlib
+/// in target/<profile>/deps/, where this test binary lives too.
 fn library() -> PathBuf {
     let exe = std::env::current_exe().unwrap();
-    let dir = exe.parent().unwrap().parent().unwrap();
-    let lib = dir.join("libstacked_live_load.so");
+    let lib = exe.parent().unwrap().join("libstacked_live_load.so");
     assert!(lib.exists(), "{} not built", lib.display());
     lib
 }
