@@ -212,6 +212,8 @@ impl Exact {
             u0_history: vec![0.0],
         };
         let mut cache: Option<(Mode, f64, DMatrix<f64>, DMatrix<f64>)> = None;
+        // Relative displacement of each stuck pair, fixed when it stuck.
+        let mut offsets = vec![0.0; m];
         let extended: Vec<(f64, f64)> = gm
             .time
             .iter()
@@ -240,16 +242,27 @@ impl Exact {
                 let mut prev = z.clone();
                 let mut event = None;
                 for k in 1..=sub {
-                    let next = e_delta * &prev;
+                    let mut next = e_delta * &prev;
+                    self.hold_stuck(&mode, &mut next, &offsets);
                     let tk = |f: f64| (k as f64 - 1.0 + f) * delta;
-                    // Extrema of u0 and of the slips between samples.
-                    self.track_peaks(h, &prev, &next, delta, &mut res);
                     for j in 1..=n {
                         let g = self.guard(&mode, &next, j);
+                        let mut from = 0.0;
+                        if !armed[j - 1] && g <= 0.0 && k == 1 {
+                            // A contact that has just switched may hold only for
+                            // a fraction of a sub-sample: probe geometrically.
+                            if let Some(f) = (1..=30).map(|e| 0.5f64.powi(e)).find(|&f| {
+                                let zz = expm(&(h * (f * delta))) * &prev;
+                                self.guard(&mode, &zz, j) > 0.0
+                            }) {
+                                armed[j - 1] = true;
+                                from = f;
+                            }
+                        }
                         if !armed[j - 1] {
                             armed[j - 1] = g > 0.0;
                         } else if g < 0.0 {
-                            let f = bisect(0.0, 1.0, |f| {
+                            let f = bisect(from, 1.0, |f| {
                                 let zz = expm(&(h * (f * delta))) * &prev;
                                 self.guard(&mode, &zz, j) > 0.0
                             });
@@ -258,8 +271,17 @@ impl Exact {
                             }
                         }
                     }
-                    if event.is_some() {
-                        break;
+                    // Extrema of u0 and of the slips between samples, on the
+                    // exact trajectory only: up to the event if there is one.
+                    match event {
+                        Some((te, _)) => {
+                            let f = te / delta - (k as f64 - 1.0);
+                            let mut at_event = expm(&(h * (f * delta))) * &prev;
+                            self.hold_stuck(&mode, &mut at_event, &offsets);
+                            self.track_peaks(h, &prev, &at_event, f * delta, &mut res);
+                            break;
+                        }
+                        None => self.track_peaks(h, &prev, &next, delta, &mut res),
                     }
                     prev = next;
                 }
@@ -270,9 +292,16 @@ impl Exact {
                     }
                     Some((te, located)) => {
                         z = expm(&(h * te)) * &z_start;
+                        self.hold_stuck(&mode, &mut z, &offsets);
                         tau += te;
                         z[2 * m + 1] = a_a + slope * tau;
+                        let before = mode;
                         self.switch(&mut mode, &mut z, located);
+                        for j in 1..m {
+                            if mode.is_stuck(j) && !before.is_stuck(j) {
+                                offsets[j] = z[j] - z[j - 1];
+                            }
+                        }
                         res.events += 1;
                         let abs_u0 = z[0].abs();
                         res.peak_u0 = res.peak_u0.max(abs_u0);
@@ -287,6 +316,18 @@ impl Exact {
     }
 
     /// Fires every guard that is <= 0: joins velocities, resolves the mode.
+    /// In exact arithmetic stuck bodies keep their offset and share one
+    /// velocity; the full-state propagation only does so up to rounding.
+    fn hold_stuck(&self, mode: &Mode, z: &mut DVector<f64>, offsets: &[f64]) {
+        let m = self.m;
+        for j in 1..m {
+            if mode.is_stuck(j) {
+                z[j] = z[j - 1] + offsets[j];
+                z[m + j] = z[m + j - 1];
+            }
+        }
+    }
+
     /// The located guard fires whatever its sign after rounding.
     fn switch(&self, mode: &mut Mode, z: &mut DVector<f64>, located: usize) {
         let m = self.m;
@@ -391,8 +432,8 @@ pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-300)
 }
 
-/// Relative difference of slips, with a 1 nm floor: an interface that never
-/// slips is 0 in one solution and ~1e-17 m of rounding in the other.
+/// Relative difference of slips, with a 1 nm floor (an interface that never
+/// slips is 0 in both solutions up to rounding).
 pub fn rel_slip(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-9)
 }
