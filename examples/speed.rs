@@ -8,7 +8,10 @@ fn main() {
     let mut p = Params::default();
     p.n_blocks = n;
     let gm = synthetic::default_record(p.g);
-    let reps = 300;
+    let reps: usize = std::env::var("REPS")
+        .ok()
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(300);
     let t = std::time::Instant::now();
     let mut st = Stats::default();
     for _ in 0..reps {

@@ -219,6 +219,9 @@ impl Segment<'_> {
     /// Input work `-M ∫ ag v dt` on the clusters above the structure's over `tau`.
     fn upper_input_work(&self, tau: f64) -> f64 {
         let d = self.dynamics;
+        if d.n_clusters == 1 {
+            return 0.0;
+        }
         let x = self.start(); // not used by clusters c >= 1
         let (ag_a, _) = self.inputs(self.t0);
         let (ag_m, _) = self.inputs(self.t0 + 0.5 * tau);
@@ -706,7 +709,10 @@ impl Simulator {
                 let (x0, x1) = (seg.start(), seg.structure_after(h));
                 let mut earliest: Option<(f64, usize)> = None;
                 for j in 1..=self.sys.n {
-                    if muted & (1 << j) != 0 || self.sys.is_free(j) {
+                    // A stick above the structure's cluster carries a constant
+                    // force for the whole mode: its guard cannot cross.
+                    let constant = self.mode.is_stuck(j) && self.dynamics.cluster_of[j] != 0;
+                    if muted & (1 << j) != 0 || self.sys.is_free(j) || constant {
                         continue;
                     }
                     let g1 = seg.guard(j, &x1, h);
