@@ -1,0 +1,113 @@
+"""Ground-motion readers, IS 1893 spectra and response spectra (issue #4)."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "scripts"))
+import seismic  # noqa: E402
+import sll  # noqa: E402
+
+RECORDS = ROOT.parent / "shared" / "ground_motions"
+FILES = sorted(p for p in RECORDS.iterdir() if p.suffix.lower() == ".at2")
+
+
+def sources_table() -> dict:
+    """NPTS, DT, PGA and Sa(0.2/0.5/1/2 s) per file, from SOURCES.md."""
+    out = {}
+    for line in (RECORDS / "SOURCES.md").read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        for i, cell in enumerate(cells):
+            if (RECORDS / cell).is_file() and len(cells) > i + 8:
+                out[cell] = {"npts": int(cells[i + 4]), "dt": float(cells[i + 5]),
+                             "pga": float(cells[i + 7]),
+                             "sa": [float(x) for x in cells[i + 8].split("/")]}
+    return out
+
+
+def rust_info(path: Path) -> dict:
+    exe = ROOT / "target" / "release" / "record_info"
+    if not exe.exists():
+        subprocess.run(["cargo", "build", "--release", "--bin", "record_info"], cwd=ROOT, check=True)
+    return json.loads(subprocess.run([str(exe), str(path)], check=True, capture_output=True,
+                                     text=True).stdout)
+
+
+def test_every_shared_record_parses_alike_in_rust_and_python():
+    table = sources_table()
+    assert len(FILES) == 20 and set(table) == {f.name for f in FILES}
+    for f in FILES:
+        t, a = sll.read_record(f, g=1.0)
+        rust = rust_info(f)
+        assert len(a) == rust["npts"] == table[f.name]["npts"], f.name
+        assert t[1] - t[0] == pytest.approx(rust["dt"], rel=1e-12)
+        assert t[1] - t[0] == pytest.approx(table[f.name]["dt"], rel=1e-9)
+        assert np.max(np.abs(a)) == rust["pga"], f.name  # same decimal strings, same doubles
+        assert rust["pga"] == pytest.approx(table[f.name]["pga"], abs=5e-5)  # SOURCES: 4 decimals
+
+
+def test_readers_report_file_line_and_what_was_expected(tmp_path):
+    bad = tmp_path / "short.AT2"
+    bad.write_text("a\nb\nc\nNPTS=    3, DT=   .0100 SEC\n 0.1 0.2\n")
+    with pytest.raises(ValueError, match="NPTS = 3 but the file holds 2 values"):
+        sll.read_record(bad)
+    csv = tmp_path / "bad.csv"
+    csv.write_text("time,accel\n0,0\n0.01,x\n")
+    with pytest.raises(ValueError, match=r"bad.csv:3: expected two numbers"):
+        sll.read_record(csv)
+
+
+@pytest.mark.parametrize("soil,T,expected", [
+    # Hand values of IS 1893 (Part 1):2016 cl. 6.4.2 (b), each branch:
+    ("I", 0.0, 1.0), ("I", 0.05, 1.75), ("I", 0.1, 2.5), ("I", 0.4, 2.5), ("I", 0.5, 2.0),
+    ("I", 2.0, 0.5), ("I", 4.0, 0.25), ("I", 6.0, 0.25),
+    ("II", 0.08, 2.2), ("II", 0.55, 2.5), ("II", 1.0, 1.36), ("II", 5.0, 0.34),
+    ("III", 0.67, 2.5), ("III", 2.0, 0.835), ("III", 10.0, 0.4175),
+])
+def test_is1893_sa_over_g(soil, T, expected):
+    assert seismic.sa_over_g(T, soil) == pytest.approx(expected, rel=1e-12)
+
+
+def test_is1893_zones_levels_and_damping():
+    assert seismic.design_spectrum(0.3, "V", "I", "DBE") == pytest.approx(0.36 / 2 * 2.5)
+    assert seismic.design_spectrum(1.0, "III", "II", "MCE") == pytest.approx(0.16 * 1.36)
+    assert seismic.design_spectrum(0.0, "II", "III", "DBE") == pytest.approx(0.05)
+    assert seismic.damping_factor(0.02) == pytest.approx(1.4)
+    assert seismic.damping_factor(0.035) == pytest.approx(1.2)  # linear between 2 % and 5 %
+    assert seismic.damping_factor(0.10) == pytest.approx(0.8)
+    assert seismic.design_spectrum(0.3, "V", "I", "DBE", zeta=0.02) == pytest.approx(0.18 * 2.5 * 1.4)
+    with pytest.raises(ValueError, match="zone"):
+        seismic.design_spectrum(1.0, "VI")
+    with pytest.raises(ValueError, match="30 %"):
+        seismic.damping_factor(0.4)
+
+
+def test_response_spectra_match_the_published_values_of_every_record():
+    # SOURCES.md: 5 %-damped Sa at 0.2/0.5/1/2 s, exact piecewise-linear recurrence,
+    # 3 decimals (values at the samples).
+    table = sources_table()
+    for f in FILES:
+        t, a = sll.read_record(f, g=1.0)
+        psa, _ = seismic.response_spectrum(a, t[1] - t[0], [0.2, 0.5, 1.0, 2.0], between_samples=False)
+        for got, ref in zip(psa, table[f.name]["sa"]):
+            assert got == pytest.approx(ref, abs=6e-4), f"{f.name}: {psa} vs {table[f.name]['sa']}"
+
+
+def test_response_spectrum_agrees_with_the_fmu_without_blocks():
+    # Issue #4: the FMU with nBlocks = 0 gives the spectral displacement (to 1e-4).
+    path = RECORDS / "RSN6_IMPVALL.I_I-ELC180.AT2"
+    t, a = sll.read_record(path)
+    periods = [0.2, 0.5, 1.0, 2.0, 3.0]
+    _, sd = seismic.response_spectrum(a, t[1] - t[0], periods)
+    with sll.Model() as m:
+        for T, expected in zip(periods, sd):
+            peak = m.run(path, {"nBlocks": 0, "Tp": T, "zeta": 0.05})["peaks"]["peakUp"]
+            assert peak == pytest.approx(expected, rel=1e-4), f"T = {T}"
