@@ -79,8 +79,23 @@ def response_spectrum(acc: np.ndarray, dt: float, periods, zeta: float = 0.05,
     """(PSA, SD) of a record `acc` sampled every `dt` (linear between samples),
     from rest: SD = max |u| of u'' + 2 zeta w u' + w^2 u = -acc, PSA = w^2 SD
     (same units as `acc`). Exact recurrence (Nigam & Jennings), all periods at
-    once. With `between_samples`, the peak is also sought between samples on the
-    cubic through each step (the FMU's rule); otherwise at samples only."""
+    once.
+
+    With `between_samples` (the default) the peak is the continuous one: each
+    record step is split so that the shortest period has at least 10 sub-steps
+    (the record stays linear, the recurrence exact), and the peak is sought on
+    the cubic through each sub-step (the FMU's rule). Otherwise the peak is read
+    at the record's samples only, which underestimates short periods."""
+    if between_samples:
+        split = max(1, int(np.ceil(10.0 * dt / float(np.min(periods)))))
+        if split > 1:
+            acc = np.asarray(acc, dtype=float)
+            fine = np.interp(np.arange((len(acc) - 1) * split + 1) / split, np.arange(len(acc)), acc)
+            return _spectrum(fine, dt / split, periods, zeta, True)
+    return _spectrum(acc, dt, periods, zeta, between_samples)
+
+
+def _spectrum(acc, dt, periods, zeta, between_samples):
     T = np.asarray(periods, dtype=float)
     w = 2.0 * np.pi / T
     wd = w * np.sqrt(1.0 - zeta * zeta)

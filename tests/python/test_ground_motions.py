@@ -111,3 +111,27 @@ def test_response_spectrum_agrees_with_the_fmu_without_blocks():
         for T, expected in zip(periods, sd):
             peak = m.run(path, {"nBlocks": 0, "Tp": T, "zeta": 0.05})["peaks"]["peakUp"]
             assert peak == pytest.approx(expected, rel=1e-4), f"T = {T}"
+
+
+def test_a_three_record_suite_meets_the_zone_v_criterion_and_runs_through_the_fmu(tmp_path):
+    import ground_motions as gmod
+
+    records = [RECORDS / f for f in ("RSN15_KERN_TAF021.AT2", "RSN787_LOMAP_SLC270.AT2",
+                                     "RSN33_PARKF_TMB205.AT2")]
+    suite = gmod.build_suite(records, "V", "I", "DBE", tmp_path)
+    assert suite["criterion"]["passed"], suite["criterion"]
+    assert (tmp_path / "spectra.png").stat().st_size > 10_000
+    for entry in suite["records"]:
+        # Baseline correction: final velocity and displacement (integrated from the
+        # written record) below 1 % of their peaks (measured < 0.1 %).
+        assert entry["final_velocity_ratio"] < 0.01, entry
+        assert entry["final_displacement_ratio"] < 0.01, entry
+        # Each matched record's own spectrum is within 35 % of the target everywhere.
+        assert entry["match_error"]["max_abs"] < 0.35, entry
+        csv = tmp_path / entry["file"]
+        t, a = sll.read_record(csv)
+        psa, _ = seismic.response_spectrum(a / 9.81, t[1] - t[0], [0.3])
+        assert psa[0] == pytest.approx(seismic.design_spectrum(0.3, "V"), rel=0.35)
+        with sll.Model() as m:
+            peaks = m.run(csv)["peaks"]
+        assert np.isfinite(peaks["peakUp"]) and peaks["peakUp"] > 0
