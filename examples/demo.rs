@@ -5,7 +5,7 @@ use stacked_live_load::{record, synthetic, Params, Settings, Simulator};
 
 fn main() {
     let stack = Params::default();
-    let gm = synthetic::default_record(stack.g);
+    let gm = synthetic::default_record();
     let mut single = stack.clone();
     single.n_blocks = 1;
     single.alpha[0] = stack.alpha[0] + stack.alpha[1];

@@ -7,7 +7,7 @@ fn main() {
         .unwrap_or(2);
     let mut p = Params::default();
     p.n_blocks = n;
-    let gm = synthetic::default_record(p.g);
+    let gm = synthetic::default_record();
     let reps: usize = std::env::var("REPS")
         .ok()
         .map(|s| s.parse().unwrap())

@@ -4,7 +4,7 @@
 # resources/default_record.csv (the embedded default ground motion).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release --lib --bin model_description --bin default_record
+cargo build --release --lib --bin model_description
 stage=target/fmu/stage
 rm -rf "$stage"
 mkdir -p "$stage/binaries/linux64" "$stage/documentation" "$stage/resources"
@@ -16,7 +16,7 @@ cmp -s "$stage/modelDescription.xml" modelDescription/modelDescription.xml || {
 }
 cp target/release/libstacked_live_load.so "$stage/binaries/linux64/StackedLiveLoad.so"
 cp README.md "$stage/documentation/README.md"
-./target/release/default_record > "$stage/resources/default_record.csv"
+cp resources/default_record.csv "$stage/resources/default_record.csv"
 printf '<html><body><p>See <a href="README.md">README.md</a>.</p></body></html>\n' > "$stage/documentation/index.html"
 python3 - "$stage" target/fmu/StackedLiveLoad.fmu <<'PY'
 import os, sys, zipfile

@@ -2,6 +2,7 @@
 
     python scripts/ground_motions.py suite --zone V --soil I --level DBE --out DIR RECORD...
     python scripts/ground_motions.py paper [--out target/suites]      # the paper's Zone III and V suites
+    python scripts/ground_motions.py default                          # regenerate resources/default_record.csv
 
 `suite` matches every record to the target (continuous-wavelet matching with
 baseline correction, reqpy-m), writes each matched record as DIR/NAME.csv
@@ -166,6 +167,26 @@ def plot(path: Path, target, spectra, mean, title: str):
     plt.close(fig)
 
 
+def make_default() -> int:
+    """The embedded default record: the deterministic synthetic seed (Rust,
+    `seed_record`) matched to the Zone V hard-soil DBE spectrum; committed as
+    resources/default_record.csv so that the demo needs no file and no Python."""
+    import subprocess
+
+    subprocess.run(["cargo", "build", "--release", "--bin", "seed_record"], cwd=ROOT, check=True)
+    seed = ROOT / "target" / "seed_record.csv"
+    seed.write_text(subprocess.run([str(ROOT / "target" / "release" / "seed_record")], check=True,
+                                   capture_output=True, text=True).stdout)
+    out = ROOT / "target" / "default_record_suite"
+    suite = build_suite([seed], "V", "I", "DBE", out)
+    record = ROOT / "resources" / "default_record.csv"
+    record.parent.mkdir(exist_ok=True)
+    t, a = sll.read_record(out / "seed_record.csv")
+    np.savetxt(record, np.c_[t, a], delimiter=",", header="time,accel", comments="", fmt="%.8g")
+    print(f"wrote {record} ({len(t)} samples, PGA {np.max(np.abs(a)) / G:.3f} g)")
+    return 0 if suite["criterion"]["passed"] else 1
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="command", required=True)
@@ -177,7 +198,10 @@ def main(argv=None):
     s.add_argument("--out", type=Path, required=True)
     p = sub.add_parser("paper", help="the paper's Zone III and Zone V suites (hard soil, DBE)")
     p.add_argument("--out", type=Path, default=ROOT / "target" / "suites")
+    sub.add_parser("default", help="match the synthetic seed into resources/default_record.csv")
     args = ap.parse_args(argv)
+    if args.command == "default":
+        return make_default()
     if args.command == "suite":
         suite = build_suite(args.records, args.zone, args.soil, args.level, args.out)
         return 0 if suite["criterion"]["passed"] else 1

@@ -64,6 +64,11 @@ impl GroundMotion {
         }
     }
 
+    /// Parses CSV `time,accel` text (m/s2); `name` appears in errors.
+    pub fn from_csv_text(text: &str, name: &str) -> Result<GroundMotion, RecordError> {
+        parse_csv(text, name)
+    }
+
     /// Duration covered by the samples (time of the last one).
     pub fn duration(&self) -> f64 {
         self.time.last().copied().unwrap_or(0.0)

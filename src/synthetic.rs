@@ -1,5 +1,6 @@
-//! The embedded default ground motion: a deterministic broadband record, so
-//! that the demo and the tests need no file.
+//! Synthetic ground motions: the deterministic broadband generator (the seed
+//! of the embedded default record, and a test signal), and the embedded
+//! default record itself, so that the demo needs no file.
 
 use crate::record::GroundMotion;
 use std::f64::consts::PI;
@@ -36,19 +37,35 @@ pub fn broadband(duration: f64, dt: f64, pga: f64) -> GroundMotion {
     GroundMotion::uniform(dt, raw.iter().map(|a| a * pga / peak).collect())
 }
 
-/// The demo's record: 20 s at 0.005 s, PGA 0.36 g (IS 1893 Zone V, Z = 0.36).
-pub fn default_record(g: f64) -> GroundMotion {
-    broadband(20.0, 0.005, 0.36 * g)
+/// The embedded default record (`resources/default_record.csv`, m/s2): the
+/// broadband seed (20 s at 0.005 s) matched to the IS 1893 (Part 1):2016 Zone V
+/// hard-soil DBE spectrum by `scripts/ground_motions.py default`.
+pub fn default_record() -> GroundMotion {
+    const CSV: &str = include_str!("../resources/default_record.csv");
+    GroundMotion::from_csv_text(CSV, "resources/default_record.csv")
+        .expect("the embedded record is valid")
 }
 
 #[cfg(test)]
 mod tests {
     #[test]
-    fn is_deterministic_and_scaled() {
-        let a = super::default_record(9.81);
-        let b = super::default_record(9.81);
-        assert_eq!(a, b);
+    fn broadband_is_deterministic_and_scaled() {
+        let a = super::broadband(20.0, 0.005, 3.0);
+        assert_eq!(a, super::broadband(20.0, 0.005, 3.0));
         assert_eq!(a.time.len(), 4001);
-        assert!((a.pga() - 0.36 * 9.81).abs() < 1e-12);
+        assert!((a.pga() - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_embedded_default_record_reads() {
+        let gm = super::default_record();
+        assert!(gm.time.len() > 4000 && (gm.time[1] - 0.005).abs() < 1e-12);
+        assert!(gm.duration() >= 20.0);
+        // Matched to Zone V DBE (ZPA 0.18 g): a PGA of about 0.2 g.
+        assert!(
+            (0.15 * 9.81..0.3 * 9.81).contains(&gm.pga()),
+            "{}",
+            gm.pga()
+        );
     }
 }

@@ -46,6 +46,7 @@ pub fn scaled_to_pga(gm: &GroundMotion, pga: f64) -> GroundMotion {
     }
 }
 
+#[allow(unused_imports)]
 pub use stacked_live_load::synthetic::broadband;
 
 /// Matrix exponential by scaling and squaring of a degree-20 Taylor sum.
