@@ -56,11 +56,17 @@ PAPER_SUITE = [
 ]
 
 
+SINGLE_COLUMN_DT: float | None = None  # set by --dt: single-column records (in g)
+
+
 def read_in_g(path: Path) -> tuple[np.ndarray, float]:
-    """Record in g (AT2 files are in g; CSV files in m/s2) and its step."""
-    t, a = sll.read_record(path, g=1.0)
-    if path.suffix.lower() != ".at2":
-        a = a / G
+    """Record in g (AT2 and single-column files are in g; CSV files in m/s2) and its step."""
+    if SINGLE_COLUMN_DT is not None and path.suffix.lower() not in (".at2", ".csv"):
+        t, a = sll.read_record(path, g=1.0, dt=SINGLE_COLUMN_DT)
+    else:
+        t, a = sll.read_record(path, g=1.0)
+        if path.suffix.lower() != ".at2":
+            a = a / G
     dt = float(t[1] - t[0])
     if not np.allclose(np.diff(t), dt, rtol=1e-6):
         raise ValueError(f"{path}: matching needs a constant time step")
@@ -69,7 +75,8 @@ def read_in_g(path: Path) -> tuple[np.ndarray, float]:
 
 def match(path: Path, target_args: dict) -> dict:
     """Matched, baseline-corrected record (in g) with its kinematics; cached."""
-    key = hashlib.sha1(path.read_bytes() + json.dumps([target_args, MATCHER], sort_keys=True).encode()).hexdigest()
+    settings = json.dumps([target_args, MATCHER, SINGLE_COLUMN_DT], sort_keys=True).encode()
+    key = hashlib.sha1(path.read_bytes() + settings).hexdigest()
     cached = CACHE / f"{key}.npz"
     if cached.exists():
         with np.load(cached) as z:
@@ -196,6 +203,8 @@ def main(argv=None):
     s.add_argument("--soil", default="I", choices=list(seismic.SOIL))
     s.add_argument("--level", default="DBE", choices=["DBE", "MCE"])
     s.add_argument("--out", type=Path, required=True)
+    s.add_argument("--dt", type=float, help="time step of single-column records (values in g; "
+                                            "files other than .AT2 and .csv)")
     p = sub.add_parser("paper", help="the paper's Zone III and Zone V suites (hard soil, DBE)")
     p.add_argument("--out", type=Path, default=ROOT / "target" / "suites")
     sub.add_parser("default", help="match the synthetic seed into resources/default_record.csv")
@@ -203,6 +212,8 @@ def main(argv=None):
     if args.command == "default":
         return make_default()
     if args.command == "suite":
+        global SINGLE_COLUMN_DT
+        SINGLE_COLUMN_DT = args.dt
         suite = build_suite(args.records, args.zone, args.soil, args.level, args.out)
         return 0 if suite["criterion"]["passed"] else 1
     ok = True

@@ -39,13 +39,31 @@ def fmu_path() -> Path:
     return FMU_PATH if FMU_PATH.exists() else build_fmu()
 
 
-def read_record(path: str | Path, g: float = 9.81) -> tuple[np.ndarray, np.ndarray]:
-    """(time, accel in m/s2) of a PEER .AT2 (units of g) or CSV `time,accel` file,
-    read by the same rules as the FMU: AT2 header line 4 gives NPTS and DT in either
-    PEER form, the value count must equal NPTS, the first value is at t = 0."""
+def read_record(path: str | Path, g: float = 9.81, dt: float | None = None,
+                single_column_units: str = "g") -> tuple[np.ndarray, np.ndarray]:
+    """(time, accel in m/s2) of a record, read by the same rules as the Rust reader:
+    - PEER .AT2 (units of g): header line 4 gives NPTS and DT in either PEER form,
+      the value count must equal NPTS, the first value is at t = 0;
+    - CSV `time,accel` (m/s2), header line optional;
+    - with `dt`: a single column, one value per line, sampled every `dt`, in units
+      of g (or `single_column_units="m/s2"`)."""
     path = Path(path)
     text = path.read_bytes().decode("latin-1").replace("\r", " ")
     lines = text.split("\n")
+    if dt is not None:
+        factor = g if single_column_units == "g" else 1.0
+        values = []
+        for no, line in enumerate(lines, 1):
+            line = line.strip()
+            if not line or line.startswith("#"):
+                continue
+            try:
+                values.append(float(line))
+            except ValueError:
+                raise ValueError(f"{path}:{no}: expected one number per line, found `{line}`") from None
+        if len(values) < 2:
+            raise ValueError(f"{path}: a record needs at least two samples")
+        return np.arange(len(values)) * dt, np.array(values) * factor
     if path.suffix.lower() == ".at2":
         header = lines[3] if len(lines) > 3 else ""
         m = re.search(r"NPTS\s*=\s*([0-9.]+)\s*,?\s*DT\s*=\s*([0-9.Ee+-]+)", header, re.I)

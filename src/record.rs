@@ -64,6 +64,42 @@ impl GroundMotion {
         }
     }
 
+    /// Parses a single-column file (one acceleration per line, no header, `#`
+    /// comments allowed) sampled every `dt` from t = 0; values are multiplied
+    /// by `factor` (e.g. g for files in units of g).
+    pub fn from_single_column(
+        text: &str,
+        name: &str,
+        dt: f64,
+        factor: f64,
+    ) -> Result<GroundMotion, RecordError> {
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(err(name, 0, format!("dt = {dt} must be positive")));
+        }
+        let mut values = Vec::new();
+        for (no, line) in lines(text) {
+            let line = line.trim();
+            if line.is_empty() || line.starts_with('#') {
+                continue;
+            }
+            let v: f64 = line.parse().map_err(|_| {
+                err(
+                    name,
+                    no,
+                    format!("expected one number per line, found `{line}`"),
+                )
+            })?;
+            if !v.is_finite() {
+                return Err(err(name, no, format!("value `{line}` is not finite")));
+            }
+            values.push(v * factor);
+        }
+        if values.len() < 2 {
+            return Err(err(name, 0, "a record needs at least two samples"));
+        }
+        Ok(GroundMotion::uniform(dt, values))
+    }
+
     /// Parses CSV `time,accel` text (m/s2); `name` appears in errors.
     pub fn from_csv_text(text: &str, name: &str) -> Result<GroundMotion, RecordError> {
         parse_csv(text, name)
@@ -308,6 +344,16 @@ mod tests {
         assert!(e.to_string().contains("NPTS = 3 but the file holds 2"));
         let d = "t\nt\nt\nNPTS= 2, DT= .01\n1 x\n";
         assert_eq!(parse_at2(d, "d", 1.0).unwrap_err().line, 5);
+    }
+
+    #[test]
+    fn single_column_with_its_step() {
+        let gm = GroundMotion::from_single_column("# in g\n0.1\n-0.2\r\n0.3\n", "s", 0.02, 10.0)
+            .unwrap();
+        assert_eq!(gm.accel, vec![1.0, -2.0, 3.0]);
+        assert_eq!(gm.time[2], 0.04);
+        let e = GroundMotion::from_single_column("0.1\n0.2 0.3\n", "s.txt", 0.01, 1.0).unwrap_err();
+        assert_eq!((e.line, e.file.as_str()), (2, "s.txt"));
     }
 
     #[test]

@@ -54,6 +54,31 @@ def test_every_shared_record_parses_alike_in_rust_and_python():
         assert rust["pga"] == pytest.approx(table[f.name]["pga"], abs=5e-5)  # SOURCES: 4 decimals
 
 
+def test_single_column_files_read_alike_in_rust_and_python(tmp_path):
+    # A single-column conversion (no header, units of g) of a PEER record.
+    t, a = sll.read_record(RECORDS / "RSN6_IMPVALL.I_I-ELC180.AT2", g=1.0)
+    one = tmp_path / "elcentro_1col.txt"
+    one.write_text("\r\n".join(f"{x:.7E}" for x in a) + "\r\n")
+    t1, a1 = sll.read_record(one, g=1.0, dt=0.01)
+    rust = rust_info_single(one, 0.01)
+    assert len(a1) == rust["npts"] == len(a)
+    assert np.max(np.abs(a1)) == rust["pga"] == np.max(np.abs(a))
+    assert np.array_equal(t1, t)
+    t2, a2 = sll.read_record(one, dt=0.01)  # default: values in g -> m/s2
+    assert np.allclose(a2, a * 9.81)
+    one.write_text("0.1\n0.2 0.3\n")
+    with pytest.raises(ValueError, match=r"1col.txt:2: expected one number per line"):
+        sll.read_record(one, dt=0.01)
+
+
+def rust_info_single(path: Path, dt: float) -> dict:
+    exe = ROOT / "target" / "release" / "record_info"
+    subprocess.run(["cargo", "build", "--release", "--bin", "record_info"], cwd=ROOT, check=True,
+                   capture_output=True)
+    return json.loads(subprocess.run([str(exe), str(path), str(dt)], check=True, capture_output=True,
+                                     text=True).stdout)
+
+
 def test_readers_report_file_line_and_what_was_expected(tmp_path):
     bad = tmp_path / "short.AT2"
     bad.write_text("a\nb\nc\nNPTS=    3, DT=   .0100 SEC\n 0.1 0.2\n")
