@@ -60,12 +60,25 @@ pub fn auto_step(settings: &Settings, omega_p: f64) -> f64 {
 #[derive(Clone, Debug, PartialEq)]
 pub enum SimError {
     /// An input was NaN or infinite.
-    BadInput { name: &'static str, value: f64 },
+    BadInput {
+        /// The input's name (`ag`, `der(ag)`, `Fext`, `der(Fext)`, `t_end`).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+    },
     /// `t_end` is before the current time.
-    BadTime { now: f64, t_end: f64 },
+    BadTime {
+        /// The simulator's time.
+        now: f64,
+        /// The time asked for.
+        t_end: f64,
+    },
     /// The state left the finite numbers (cannot happen with the step bound;
     /// reported rather than propagated as NaN).
-    NonFinite { t: f64 },
+    NonFinite {
+        /// When it happened.
+        t: f64,
+    },
 }
 
 impl std::fmt::Display for SimError {
@@ -102,26 +115,47 @@ pub struct Stats {
 /// indexed by block number minus one; entries beyond `n_blocks` are 0.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Outputs {
+    /// Time (s).
     pub t: f64,
+    /// Structure displacement relative to the support (m).
     pub up: f64,
+    /// Structure velocity relative to the support (m/s).
     pub vp: f64,
+    /// Structure absolute acceleration (m/s2).
     pub ap_abs: f64,
+    /// Force on the support, `k up + c vp` (N).
     pub base_shear: f64,
+    /// Block displacements relative to the support (m).
     pub ub: [f64; MAX_BLOCKS],
+    /// Block velocities relative to the support (m/s).
     pub vb: [f64; MAX_BLOCKS],
+    /// Block displacements relative to the body below (m).
     pub slip: [f64; MAX_BLOCKS],
+    /// Block absolute accelerations (m/s2).
     pub ab_abs: [f64; MAX_BLOCKS],
+    /// Friction force of interface j on block j (N).
     pub force: [f64; MAX_BLOCKS],
+    /// Interface j is stuck.
     pub stuck: [bool; MAX_BLOCKS],
+    /// Largest |up| so far, between steps too (m).
     pub peak_up: f64,
+    /// Largest |slip| of each interface so far (m).
     pub peak_slip: [f64; MAX_BLOCKS],
+    /// Largest |ap_abs| so far (m/s2).
     pub peak_ap_abs: f64,
+    /// Input energy in relative coordinates (J).
     pub e_input: f64,
+    /// Kinetic energy in relative coordinates (J).
     pub e_kinetic: f64,
+    /// Strain energy of the structure's spring (J).
     pub e_strain: f64,
+    /// Energy dissipated by the damper (J).
     pub e_viscous: f64,
+    /// Energy dissipated by friction, all interfaces (J).
     pub e_friction: f64,
+    /// Energy dissipated by friction at each interface (J).
     pub e_friction_of: [f64; MAX_BLOCKS],
+    /// Mode switches so far.
     pub n_events: u64,
 }
 
@@ -398,6 +432,7 @@ impl Simulator {
         self.peak_a0 = self.structure_accel().abs();
     }
 
+    /// Current time (s).
     pub fn time(&self) -> f64 {
         self.t
     }
@@ -407,18 +442,22 @@ impl Simulator {
         self.last_event
     }
 
+    /// What the solver has done so far.
     pub fn stats(&self) -> Stats {
         self.stats
     }
 
+    /// Current stick/slip mode.
     pub fn mode(&self) -> &Mode {
         &self.mode
     }
 
+    /// The derived physical constants.
     pub fn system(&self) -> &System {
         &self.sys
     }
 
+    /// The solver settings.
     pub fn settings(&self) -> &Settings {
         &self.settings
     }

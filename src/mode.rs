@@ -41,11 +41,14 @@ impl Contact {
 /// The contact state of every interface; index j = 1..=n (index 0 unused).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Mode {
+    /// Number of blocks.
     pub n: usize,
+    /// Contact of interface j at index j (index 0 unused).
     pub contact: [Contact; MAX_BODIES],
 }
 
 impl Mode {
+    /// Every interface stuck, but free (μs = 0) ones.
     pub fn all_stuck(sys: &System) -> Mode {
         let mut contact = [Contact::Free; MAX_BODIES];
         for (j, c) in contact.iter_mut().enumerate().take(sys.n + 1).skip(1) {
@@ -56,6 +59,7 @@ impl Mode {
         Mode { n: sys.n, contact }
     }
 
+    /// Whether interface j is stuck.
     pub fn is_stuck(&self, j: usize) -> bool {
         self.contact[j] == Contact::Stuck
     }
@@ -65,11 +69,13 @@ impl Mode {
 /// constant forces the slipping interfaces put on them.
 #[derive(Clone, Debug)]
 pub struct Dynamics {
+    /// Number of clusters (degrees of freedom).
     pub n_clusters: usize,
     /// Cluster of each body.
     pub cluster_of: [usize; MAX_BODIES],
     /// Lowest and highest body of each cluster.
     pub bottom: [usize; MAX_BODIES],
+    /// Highest body of each cluster.
     pub top: [usize; MAX_BODIES],
     /// Mass of each cluster.
     pub mass: [f64; MAX_BODIES],
@@ -87,6 +93,7 @@ pub struct Dynamics {
 }
 
 impl Dynamics {
+    /// The clusters and constant loads of `mode`.
     pub fn new(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics {
             n_clusters: 0,
@@ -225,6 +232,7 @@ pub struct ResolveRequest {
 /// Outcome of a resolution.
 #[derive(Clone, Copy, Debug)]
 pub struct Resolved {
+    /// The mode found.
     pub mode: Mode,
     /// False when no assignment satisfied the contact law within
     /// [`CONSISTENCY_TOL`] and the least violating one was taken.

@@ -56,8 +56,11 @@ impl Default for Params {
 /// name (as in the FMU, e.g. `alpha[2]`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamError {
+    /// The variable's public name.
     pub field: String,
+    /// The value given.
     pub value: f64,
+    /// The allowed range, in words.
     pub allowed: &'static str,
 }
 
@@ -147,6 +150,7 @@ pub enum Method {
 /// Solver settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
+    /// How mode switches are handled.
     pub method: Method,
     /// Largest internal step (s). 0 selects the automatic accuracy bound
     /// (see [`crate::engine::auto_step`]); a positive value replaces it, but
@@ -164,6 +168,7 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// Checks `max_step`.
     pub fn validate(&self) -> Result<(), ParamError> {
         check_scalar("maxStep", self.max_step)
     }

@@ -12,16 +12,20 @@ use std::path::Path;
 /// A tabulated ground acceleration (m/s^2) at increasing times (s).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GroundMotion {
+    /// Sample times (s), increasing.
     pub time: Vec<f64>,
+    /// Accelerations at those times (m/s2).
     pub accel: Vec<f64>,
 }
 
 /// A record that could not be read: which file, which line, what was wrong.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RecordError {
+    /// The file's name as given.
     pub file: String,
     /// 1-based line number, 0 when the problem is not on one line.
     pub line: usize,
+    /// What was wrong.
     pub message: String,
 }
 

@@ -9,20 +9,28 @@ use std::f64::consts::PI;
 /// between body j-1 and body j.
 #[derive(Clone, Debug)]
 pub struct System {
+    /// Number of blocks.
     pub n: usize,
+    /// Mass of each body (kg): structure at 0, block j at j.
     pub mass: [f64; MAX_BODIES],
+    /// Structure stiffness (N/m).
     pub k: f64,
+    /// Structure damping coefficient (N s/m).
     pub c: f64,
+    /// Gravitational acceleration (m/s2).
     pub g: f64,
     /// Normal force of interface j: g times the mass of blocks j..=n.
     pub normal: [f64; MAX_BODIES],
+    /// Static friction coefficient of interface j.
     pub mus: [f64; MAX_BODIES],
+    /// Kinetic friction coefficient of interface j.
     pub muk: [f64; MAX_BODIES],
     /// Circular frequency of the bare structure, sqrt(k / mp).
     pub omega_p: f64,
 }
 
 impl System {
+    /// Validates `p` and derives the constants.
     pub fn new(p: &Params) -> Result<System, ParamError> {
         p.validate()?;
         let n = p.n_blocks;
@@ -61,6 +69,7 @@ impl System {
         self.mus[j] == 0.0
     }
 
+    /// Mass of the structure and all blocks (kg).
     pub fn total_mass(&self) -> f64 {
         self.mass[..=self.n].iter().sum()
     }
