@@ -46,6 +46,13 @@ pub const EVENT_TIME_TOL: f64 = 1e-12;
 /// past it the rest of the step switches at its end only.
 pub const MAX_EVENTS_PER_STEP: u32 = 64;
 
+/// Number of equal substeps of at most `h_max` in an interval of `length`.
+/// A ratio within 1e-9 of an integer is that integer: the interval is a
+/// difference of times carrying rounding, and must not cost an extra step.
+pub fn substeps(length: f64, h_max: f64) -> f64 {
+    (length / h_max * (1.0 - 1e-9)).ceil().max(1.0)
+}
+
 /// Largest internal step for the given settings and structure.
 pub fn auto_step(settings: &Settings, omega_p: f64) -> f64 {
     let stable = STABLE_H_OMEGA / omega_p;
@@ -504,7 +511,7 @@ impl Simulator {
         self.ag_now = exc.ag;
         let length = t_end - t_ref;
         if length > 0.0 {
-            let n = (length / self.h_max).ceil().max(1.0);
+            let n = substeps(length, self.h_max);
             let h = length / n;
             let n = n as usize;
             for i in 1..=n {

@@ -8,6 +8,7 @@
 //!   of a consistent mode at an instant.
 //! - [`engine`]: RK4 with located events, peaks and energies.
 //! - [`record`]: ground-motion files and driving a simulation through one.
+//! - [`regularized`]: tanh-regularized friction with plain RK4, a baseline.
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
 //! - [`synthetic`]: the embedded default ground motion.
 
@@ -19,6 +20,7 @@ pub mod mode;
 pub mod model_description;
 pub mod params;
 pub mod record;
+pub mod regularized;
 pub mod sdof;
 pub mod snapshot;
 pub mod synthetic;

@@ -1,0 +1,201 @@
+//! Baseline for comparisons, not a recommended mode: Coulomb friction
+//! regularized as `F_j = -muk_j N_j tanh(v_j / eps)` (no sticking, no static
+//! friction, no events), integrated by plain RK4 on every body with the
+//! step the caller gives and no automatic bound. It is the smooth-friction
+//! approach many codes use; its error has a floor of O(eps), it makes the
+//! equations stiff (eigenvalues about mu g (1 + alpha) / eps), and without
+//! a step bound RK4 diverges above h omega = 2.83 (RESEARCH.md §2).
+
+use crate::engine::{Excitation, Outputs, SimError};
+use crate::hermite;
+use crate::params::{ParamError, Params, MAX_BODIES};
+use crate::system::System;
+
+/// Full state: u and v of every body, then input, viscous and friction work.
+const STATE: usize = 2 * MAX_BODIES + 3;
+
+/// A scene with regularized friction.
+pub struct RegularizedSimulator {
+    sys: System,
+    eps: f64,
+    step: f64,
+    t: f64,
+    y: [f64; STATE],
+    peak_u0: f64,
+    peak_slip: [f64; MAX_BODIES],
+    peak_a0: f64,
+    fext_now: f64,
+}
+
+impl RegularizedSimulator {
+    /// `eps` (m/s) sets the regularization; `step` (s) is the internal step,
+    /// used as given (shortened only to end exactly at each excitation breakpoint).
+    pub fn new(params: &Params, eps: f64, step: f64) -> Result<RegularizedSimulator, ParamError> {
+        let sys = System::new(params)?;
+        for (field, value) in [("frictionEps", eps), ("step", step)] {
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(ParamError {
+                    field: field.into(),
+                    value,
+                    allowed: "finite and > 0",
+                });
+            }
+        }
+        Ok(RegularizedSimulator {
+            sys,
+            eps,
+            step,
+            t: 0.0,
+            y: [0.0; STATE],
+            peak_u0: 0.0,
+            peak_slip: [0.0; MAX_BODIES],
+            peak_a0: 0.0,
+            fext_now: 0.0,
+        })
+    }
+
+    /// Current time (s).
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// Friction force of interface j at relative velocity `v_rel`.
+    fn friction(&self, j: usize, v_rel: f64) -> f64 {
+        -self.sys.muk[j] * self.sys.normal[j] * (v_rel / self.eps).tanh()
+    }
+
+    /// Absolute accelerations of all bodies.
+    fn accelerations(&self, y: &[f64; STATE], fext: f64) -> [f64; MAX_BODIES] {
+        let (s, n) = (&self.sys, self.sys.n);
+        let v = |i: usize| y[MAX_BODIES + i];
+        let mut f = [0.0; MAX_BODIES + 1];
+        for j in 1..=n {
+            f[j] = self.friction(j, v(j) - v(j - 1));
+        }
+        let mut a = [0.0; MAX_BODIES];
+        a[0] = (fext - s.k * y[0] - s.c * v(0) - f[1]) / s.mass[0];
+        for j in 1..=n {
+            a[j] = (f[j] - f[j + 1]) / s.mass[j];
+        }
+        a
+    }
+
+    fn deriv(&self, y: &[f64; STATE], ag: f64, fext: f64) -> [f64; STATE] {
+        let n = self.sys.n;
+        let a = self.accelerations(y, fext);
+        let mut dy = [0.0; STATE];
+        let mut momentum = 0.0;
+        for i in 0..=n {
+            dy[i] = y[MAX_BODIES + i];
+            dy[MAX_BODIES + i] = a[i] - ag;
+            momentum += self.sys.mass[i] * y[MAX_BODIES + i];
+        }
+        let e = 2 * MAX_BODIES;
+        dy[e] = fext * y[MAX_BODIES] - ag * momentum;
+        dy[e + 1] = self.sys.c * y[MAX_BODIES] * y[MAX_BODIES];
+        dy[e + 2] = (1..=n)
+            .map(|j| {
+                let v_rel = y[MAX_BODIES + j] - y[MAX_BODIES + j - 1];
+                -self.friction(j, v_rel) * v_rel
+            })
+            .sum();
+        dy
+    }
+
+    /// Advances to `t_end` under an excitation linear over `[now, t_end]`.
+    pub fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
+        if t_end < self.t {
+            return Err(SimError::BadTime { now: self.t, t_end });
+        }
+        let t_ref = self.t;
+        let at = |t: f64| {
+            (
+                exc.ag + exc.ag_rate * (t - t_ref),
+                exc.fext + exc.fext_rate * (t - t_ref),
+            )
+        };
+        let n_steps = crate::engine::substeps(t_end - t_ref, self.step) as usize;
+        let h = (t_end - t_ref) / n_steps as f64;
+        for i in 0..n_steps {
+            let t0 = t_ref + i as f64 * h;
+            let y0 = self.y;
+            let step = |y: &[f64; STATE], k: &[f64; STATE], c: f64| {
+                let mut out = *y;
+                for (o, d) in out.iter_mut().zip(k) {
+                    *o += c * d;
+                }
+                out
+            };
+            let (ag0, f0) = at(t0);
+            let (agm, fm) = at(t0 + 0.5 * h);
+            let (ag1, f1) = at(t0 + h);
+            let k1 = self.deriv(&y0, ag0, f0);
+            let k2 = self.deriv(&step(&y0, &k1, 0.5 * h), agm, fm);
+            let k3 = self.deriv(&step(&y0, &k2, 0.5 * h), agm, fm);
+            let k4 = self.deriv(&step(&y0, &k3, h), ag1, f1);
+            let mut y1 = y0;
+            for i in 0..STATE {
+                y1[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+            }
+            self.track_peaks(&y0, &y1, h, f0, f1);
+            self.y = y1;
+        }
+        self.t = t_end;
+        self.fext_now = at(t_end).1;
+        if self.y.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(SimError::NonFinite { t: self.t })
+        }
+    }
+
+    fn track_peaks(&mut self, y0: &[f64; STATE], y1: &[f64; STATE], h: f64, f0: f64, f1: f64) {
+        let m = MAX_BODIES;
+        let p = hermite::max_abs_above(y0[0], y0[m], y1[0], y1[m], h, self.peak_u0);
+        self.peak_u0 = self.peak_u0.max(p);
+        for j in 1..=self.sys.n {
+            let (s0, s1) = (y0[j] - y0[j - 1], y1[j] - y1[j - 1]);
+            let (r0, r1) = (y0[m + j] - y0[m + j - 1], y1[m + j] - y1[m + j - 1]);
+            let p = hermite::max_abs_above(s0, r0, s1, r1, h, self.peak_slip[j]);
+            self.peak_slip[j] = self.peak_slip[j].max(p);
+        }
+        // Structure acceleration: sampled at step ends (a baseline).
+        let a1 = self.accelerations(y1, f1)[0];
+        let a0 = self.accelerations(y0, f0)[0];
+        self.peak_a0 = self.peak_a0.max(a0.abs()).max(a1.abs());
+    }
+
+    /// The same outputs as the event-driven engine (`stuck` is never set).
+    pub fn outputs(&self) -> Outputs {
+        let (s, y, m) = (&self.sys, &self.y, MAX_BODIES);
+        let a = self.accelerations(y, self.fext_now);
+        let e = 2 * m;
+        let mut o = Outputs {
+            t: self.t,
+            up: y[0],
+            vp: y[m],
+            ap_abs: a[0],
+            base_shear: s.k * y[0] + s.c * y[m],
+            peak_up: self.peak_u0,
+            peak_ap_abs: self.peak_a0,
+            e_input: y[e],
+            e_kinetic: (0..=s.n)
+                .map(|i| 0.5 * s.mass[i] * y[m + i] * y[m + i])
+                .sum(),
+            e_strain: 0.5 * s.k * y[0] * y[0],
+            e_viscous: y[e + 1],
+            e_friction: y[e + 2],
+            ..Outputs::default()
+        };
+        for j in 1..=s.n {
+            let b = j - 1;
+            o.ub[b] = y[j];
+            o.vb[b] = y[m + j];
+            o.slip[b] = y[j] - y[j - 1];
+            o.ab_abs[b] = a[j];
+            o.force[b] = self.friction(j, y[m + j] - y[m + j - 1]);
+            o.peak_slip[b] = self.peak_slip[j];
+        }
+        o
+    }
+}

@@ -1,0 +1,118 @@
+//! The regularized-friction baseline and RK4 stability (RESEARCH.md §2),
+//! pinned so that the accuracy/speed chart cannot silently lie.
+
+mod common;
+use common::*;
+use stacked_live_load::regularized::RegularizedSimulator;
+use stacked_live_load::*;
+use std::f64::consts::PI;
+
+#[test]
+fn regularized_friction_has_an_error_floor_that_scales_with_eps() {
+    // Oracle: the exact event-driven reference (mus = muk). RESEARCH.md §2
+    // measured peak errors of 5.4e-3, 7.2e-4, 9.1e-5 for eps = 1e-2 ... 1e-4 m/s.
+    let mut p = Params::default();
+    p.n_blocks = 1;
+    p.alpha[0] = 0.5;
+    let gm = broadband(10.0, 0.005, 0.4 * 9.81);
+    let exact = Exact::new(&p).run(&gm, 16).peak_u0;
+    let mut errors = vec![];
+    for eps in [1e-2, 1e-3, 1e-4] {
+        // Below the explicit stability limit 2.785 eps / (mu g (1 + alpha)), with margin.
+        let h = (0.5 * 2.785 * eps / (p.muk[0] * p.g * (1.0 + p.alpha[0]))).min(1e-3);
+        let mut s = RegularizedSimulator::new(&p, eps, h).unwrap();
+        for w in gm.time.windows(2).zip(gm.accel.windows(2)) {
+            let ((t0, t1), (a0, a1)) = ((w.0[0], w.0[1]), (w.1[0], w.1[1]));
+            let exc = Excitation {
+                ag: a0,
+                ag_rate: (a1 - a0) / (t1 - t0),
+                ..Default::default()
+            };
+            s.advance(t1, &exc).unwrap();
+        }
+        let o = s.outputs();
+        errors.push(rel(o.peak_up, exact));
+        assert!(
+            o.energy_residual().abs() < 1e-6 * o.e_input,
+            "energy balance of the baseline"
+        );
+    }
+    eprintln!("regularized peak-drift errors for eps 1e-2, 1e-3, 1e-4: {errors:?}");
+    for w in errors.windows(2) {
+        let ratio = w[0] / w[1];
+        assert!(
+            (3.0..30.0).contains(&ratio),
+            "error must fall about tenfold per decade of eps: {errors:?}"
+        );
+    }
+    // The floor sits far above the event-located method's error on the same scene.
+    let mut events = Simulator::new(&p, &Settings::default()).unwrap();
+    record::run(&mut events, &gm, 1.0).unwrap();
+    let event_error = rel(events.outputs().peak_up, exact);
+    assert!(
+        errors[0] > 1e3 * event_error,
+        "floor {} vs event-located {event_error:e}",
+        errors[0]
+    );
+}
+
+/// Peak |u| of a bare undamped structure kicked by one step of ground
+/// acceleration and then left free for 300 steps of plain RK4 at h omega = theta.
+fn free_vibration_growth(theta: f64) -> f64 {
+    let mut p = Params::default();
+    p.n_blocks = 0;
+    p.zeta = 0.0;
+    p.tp = 1.0;
+    let h = theta / (2.0 * PI / p.tp);
+    let mut s = RegularizedSimulator::new(&p, 1e-3, h).unwrap();
+    s.advance(
+        h,
+        &Excitation {
+            ag: 1.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let after_kick = s.outputs().up.abs().max(1e-300);
+    let mut t = h;
+    for _ in 0..300 {
+        t += h;
+        if s.advance(t, &Excitation::default()).is_err() {
+            return f64::INFINITY;
+        }
+    }
+    s.outputs().peak_up / after_kick
+}
+
+#[test]
+fn plain_rk4_diverges_just_above_h_omega_2_83_and_not_below() {
+    // |R(i theta)| of classical RK4 crosses 1 at theta = 2 sqrt(2) = 2.828.
+    let below = free_vibration_growth(2.80);
+    let above = free_vibration_growth(2.86);
+    eprintln!("growth over 300 steps: h omega 2.80 -> {below:.2e}, 2.86 -> {above:.2e}");
+    assert!(below < 10.0, "bounded below the limit: {below}");
+    assert!(above > 1e6, "diverges above the limit: {above}");
+}
+
+#[test]
+fn the_event_engine_bounds_its_own_step_whatever_the_communication_step() {
+    // A stiff structure (Tp 0.01 s) driven with 1 s communication steps and
+    // max_step asked at 10 s: the automatic bound 2.5 / omega keeps RK4 stable.
+    let mut p = Params::default();
+    p.tp = 0.01;
+    let coarse = Settings {
+        max_step: 10.0,
+        ..Settings::default()
+    };
+    let mut s = Simulator::new(&p, &coarse).unwrap();
+    for i in 1..=5 {
+        let exc = Excitation {
+            ag: if i == 1 { 3.0 } else { 0.0 },
+            ..Default::default()
+        };
+        s.advance(i as f64, &exc).unwrap();
+    }
+    let o = s.outputs();
+    // Static response to 3 m/s2 on a rigidly loaded structure is ~3 / omega^2 (~1e-5 m).
+    assert!(o.peak_up < 1e-4 && o.up.is_finite(), "{o:?}");
+}
