@@ -834,12 +834,7 @@ impl Simulator {
 
     /// Writes the whole dynamic state (and the scene it belongs to).
     pub fn write_state(&self, w: &mut ByteWriter) {
-        let p = &self.params;
-        w.u32(p.n_blocks as u32);
-        w.f64s(&[p.mp, p.tp, p.zeta, p.g]);
-        w.f64s(&p.alpha);
-        w.f64s(&p.mus);
-        w.f64s(&p.muk);
+        self.params.write(w);
         w.u8(match self.settings.method {
             Method::EventLocated => 1,
             Method::StepEnd => 2,
@@ -869,16 +864,7 @@ impl Simulator {
 
     /// Reads a state written by [`Simulator::write_state`].
     pub fn read_state(r: &mut ByteReader) -> Result<Simulator, SnapshotError> {
-        let mut p = Params {
-            n_blocks: r.u32()? as usize,
-            ..Params::default()
-        };
-        let mut head = [0.0; 4];
-        r.f64s(&mut head)?;
-        [p.mp, p.tp, p.zeta, p.g] = head;
-        r.f64s(&mut p.alpha)?;
-        r.f64s(&mut p.mus)?;
-        r.f64s(&mut p.muk)?;
+        let p = Params::read(r)?;
         let method = match r.u8()? {
             1 => Method::EventLocated,
             2 => Method::StepEnd,

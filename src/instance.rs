@@ -324,6 +324,13 @@ impl Instance {
         Id::from_vr(vr).ok_or_else(|| self.error(func, format!("unknown value reference {vr}")))
     }
 
+    /// The variable behind `vr`, if it exists and may be set now.
+    fn target(&mut self, func: &str, vr: u32) -> Result<Id, Status> {
+        let id = self.lookup(func, vr)?;
+        self.settable(func, id)?;
+        Ok(id)
+    }
+
     /// Checks that variable `id` may be set now.
     fn settable(&mut self, func: &str, id: Id) -> Result<(), Status> {
         let phase = self.d.phase;
@@ -359,13 +366,10 @@ impl Instance {
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         const F: &str = "fmi2SetReal";
         for (&vr, &x) in vrs.iter().zip(values) {
-            let id = match self.lookup(F, vr) {
+            let id = match self.target(F, vr) {
                 Ok(id) => id,
                 Err(s) => return s,
             };
-            if let Err(s) = self.settable(F, id) {
-                return s;
-            }
             let checked = match id.causality() {
                 Causality::Parameter => check_scalar(&name_of(id), x),
                 _ if x.is_finite() => Ok(()),
@@ -399,13 +403,10 @@ impl Instance {
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
         const F: &str = "fmi2SetInteger";
         for (&vr, &x) in vrs.iter().zip(values) {
-            let id = match self.lookup(F, vr) {
+            let id = match self.target(F, vr) {
                 Ok(id) => id,
                 Err(s) => return s,
             };
-            if let Err(s) = self.settable(F, id) {
-                return s;
-            }
             match id {
                 Id::NBlocks if (0..=MAX_BLOCKS as i32).contains(&x) => {
                     self.d.values.params.n_blocks = x as usize
@@ -423,13 +424,10 @@ impl Instance {
     pub fn set_boolean(&mut self, vrs: &[u32], _values: &[i32]) -> Status {
         const F: &str = "fmi2SetBoolean";
         for &vr in vrs {
-            let id = match self.lookup(F, vr) {
+            let id = match self.target(F, vr) {
                 Ok(id) => id,
                 Err(s) => return s,
             };
-            if let Err(s) = self.settable(F, id) {
-                return s;
-            }
             return self.error(F, format!("{} is not a settable Boolean", name_of(id)));
         }
         Status::Ok
@@ -438,13 +436,10 @@ impl Instance {
     pub fn set_string(&mut self, vrs: &[u32], values: &[String]) -> Status {
         const F: &str = "fmi2SetString";
         for (&vr, x) in vrs.iter().zip(values) {
-            let id = match self.lookup(F, vr) {
+            let id = match self.target(F, vr) {
                 Ok(id) => id,
                 Err(s) => return s,
             };
-            if let Err(s) = self.settable(F, id) {
-                return s;
-            }
             match id {
                 Id::RecordFile => self.d.values.record_file = x.clone(),
                 _ => return self.error(F, format!("{} is not a String", name_of(id))),
@@ -753,12 +748,7 @@ impl Instance {
             }
             None => {
                 w.u8(0);
-                let p = &v.params;
-                w.u32(p.n_blocks as u32);
-                w.f64s(&[p.mp, p.tp, p.zeta, p.g]);
-                w.f64s(&p.alpha);
-                w.f64s(&p.mus);
-                w.f64s(&p.muk);
+                v.params.write(&mut w);
             }
         }
         w.buf
@@ -800,14 +790,7 @@ impl Instance {
                 Some(sim)
             }
             _ => {
-                let p = &mut values.params;
-                p.n_blocks = r.u32()? as usize;
-                let mut head = [0.0; 4];
-                r.f64s(&mut head)?;
-                [p.mp, p.tp, p.zeta, p.g] = head;
-                r.f64s(&mut p.alpha)?;
-                r.f64s(&mut p.mus)?;
-                r.f64s(&mut p.muk)?;
+                values.params = Params::read(&mut r)?;
                 None
             }
         };

@@ -80,3 +80,31 @@ impl<'a> ByteReader<'a> {
         self.bytes.is_empty()
     }
 }
+
+use crate::params::Params;
+
+impl Params {
+    /// Writes every field in a fixed order (part of saved states).
+    pub fn write(&self, w: &mut ByteWriter) {
+        w.u32(self.n_blocks as u32);
+        w.f64s(&[self.mp, self.tp, self.zeta, self.g]);
+        w.f64s(&self.alpha);
+        w.f64s(&self.mus);
+        w.f64s(&self.muk);
+    }
+
+    /// Reads what [`Params::write`] wrote (not validated here).
+    pub fn read(r: &mut ByteReader) -> Result<Params, SnapshotError> {
+        let mut p = Params {
+            n_blocks: r.u32()? as usize,
+            ..Params::default()
+        };
+        let mut head = [0.0; 4];
+        r.f64s(&mut head)?;
+        [p.mp, p.tp, p.zeta, p.g] = head;
+        r.f64s(&mut p.alpha)?;
+        r.f64s(&mut p.mus)?;
+        r.f64s(&mut p.muk)?;
+        Ok(p)
+    }
+}
