@@ -11,10 +11,19 @@
  */
 typedef int fmi2Status;
 
+/**
+ * An instance, as the importer holds it.
+ */
 typedef void *fmi2Component;
 
+/**
+ * FMI Boolean (0 false, otherwise true).
+ */
 typedef int fmi2Boolean;
 
+/**
+ * FMI String (NUL-terminated UTF-8).
+ */
 typedef const char *fmi2String;
 
 /**
@@ -22,8 +31,14 @@ typedef const char *fmi2String;
  */
 typedef int fmi2Type;
 
+/**
+ * The importer's pointer, passed back to its callbacks.
+ */
 typedef void *fmi2ComponentEnvironment;
 
+/**
+ * The importer's logger (variadic, printf-like).
+ */
 typedef void (*fmi2CallbackLogger)(fmi2ComponentEnvironment,
                                    fmi2String,
                                    fmi2Status,
@@ -31,31 +46,70 @@ typedef void (*fmi2CallbackLogger)(fmi2ComponentEnvironment,
                                    fmi2String,
                                    ...);
 
+/**
+ * The importer's allocator (unused: canNotUseMemoryManagementFunctions).
+ */
 typedef void *(*fmi2CallbackAllocateMemory)(uintptr_t, uintptr_t);
 
+/**
+ * The importer's deallocator (unused).
+ */
 typedef void (*fmi2CallbackFreeMemory)(void*);
 
+/**
+ * Asynchronous step callback (unused).
+ */
 typedef void (*fmi2StepFinished)(fmi2ComponentEnvironment, fmi2Status);
 
 /**
  * The importer's callbacks (FMI 2.0 `fmi2CallbackFunctions`).
  */
 typedef struct fmi2CallbackFunctions {
+  /**
+   * Logger (may be NULL).
+   */
   fmi2CallbackLogger logger;
+  /**
+   * Allocator (unused).
+   */
   fmi2CallbackAllocateMemory allocateMemory;
+  /**
+   * Deallocator (unused).
+   */
   fmi2CallbackFreeMemory freeMemory;
+  /**
+   * Step callback (unused).
+   */
   fmi2StepFinished stepFinished;
+  /**
+   * Passed back to the logger.
+   */
   fmi2ComponentEnvironment componentEnvironment;
 } fmi2CallbackFunctions;
 
+/**
+ * FMI Real.
+ */
 typedef double fmi2Real;
 
+/**
+ * A variable's value reference.
+ */
 typedef unsigned int fmi2ValueReference;
 
+/**
+ * FMI Integer.
+ */
 typedef int fmi2Integer;
 
+/**
+ * A saved state.
+ */
 typedef void *fmi2FMUstate;
 
+/**
+ * One byte of a serialized state.
+ */
 typedef char fmi2Byte;
 
 /**
@@ -67,15 +121,27 @@ typedef int fmi2StatusKind;
 extern "C" {
 #endif // __cplusplus
 
+/**
+ * "default": the standard FMI 2.0 types.
+ */
 const char *fmi2GetTypesPlatform(void);
 
+/**
+ * "2.0".
+ */
 const char *fmi2GetVersion(void);
 
+/**
+ * Turns diagnostic messages on or off (errors are always logged); categories are ignored.
+ */
 fmi2Status fmi2SetDebugLogging(fmi2Component c,
                                fmi2Boolean loggingOn,
                                uintptr_t _nCategories,
                                const fmi2String *_categories);
 
+/**
+ * Creates an instance (Co-Simulation only; the GUID must match); NULL on failure, with a logged reason.
+ */
 fmi2Component fmi2Instantiate(fmi2String instanceName,
                               fmi2Type fmuType,
                               fmi2String fmuGUID,
@@ -84,8 +150,14 @@ fmi2Component fmi2Instantiate(fmi2String instanceName,
                               fmi2Boolean _visible,
                               fmi2Boolean loggingOn);
 
+/**
+ * Frees an instance (NULL is ignored).
+ */
 void fmi2FreeInstance(fmi2Component c);
 
+/**
+ * Sets the start time (a record starts there) and the optional stop time.
+ */
 fmi2Status fmi2SetupExperiment(fmi2Component c,
                                fmi2Boolean _toleranceDefined,
                                fmi2Real _tolerance,
@@ -93,72 +165,129 @@ fmi2Status fmi2SetupExperiment(fmi2Component c,
                                fmi2Boolean stopTimeDefined,
                                fmi2Real stopTime);
 
+/**
+ * Enters initialization mode; parameters stay settable.
+ */
 fmi2Status fmi2EnterInitializationMode(fmi2Component c);
 
+/**
+ * Checks the parameters, reads `recordFile`, builds the simulator.
+ */
 fmi2Status fmi2ExitInitializationMode(fmi2Component c);
 
+/**
+ * Ends the simulation; outputs stay readable.
+ */
 fmi2Status fmi2Terminate(fmi2Component c);
 
+/**
+ * Back to the state after instantiation, with default values.
+ */
 fmi2Status fmi2Reset(fmi2Component c);
 
+/**
+ * Reads Real variables (parameters, inputs, outputs).
+ */
 fmi2Status fmi2GetReal(fmi2Component c,
                        const fmi2ValueReference *vr,
                        uintptr_t nvr,
                        fmi2Real *value);
 
+/**
+ * Reads Integer variables (`nBlocks`, `solver`, `nEvents`).
+ */
 fmi2Status fmi2GetInteger(fmi2Component c,
                           const fmi2ValueReference *vr,
                           uintptr_t nvr,
                           fmi2Integer *value);
 
+/**
+ * Reads Boolean variables (`stuck[j]`).
+ */
 fmi2Status fmi2GetBoolean(fmi2Component c,
                           const fmi2ValueReference *vr,
                           uintptr_t nvr,
                           fmi2Boolean *value);
 
+/**
+ * Sets Real parameters (before initialization ends) and inputs; out-of-range values are refused by name.
+ */
 fmi2Status fmi2SetReal(fmi2Component c,
                        const fmi2ValueReference *vr,
                        uintptr_t nvr,
                        const fmi2Real *value);
 
+/**
+ * Sets `nBlocks` (0..8) or `solver` (1 or 2).
+ */
 fmi2Status fmi2SetInteger(fmi2Component c,
                           const fmi2ValueReference *vr,
                           uintptr_t nvr,
                           const fmi2Integer *value);
 
+/**
+ * No settable Boolean: always an error.
+ */
 fmi2Status fmi2SetBoolean(fmi2Component c,
                           const fmi2ValueReference *vr,
                           uintptr_t nvr,
                           const fmi2Boolean *value);
 
+/**
+ * Reads String variables (`recordFile`); valid until the next call on the instance.
+ */
 fmi2Status fmi2GetString(fmi2Component c,
                          const fmi2ValueReference *vr,
                          uintptr_t nvr,
                          fmi2String *value);
 
+/**
+ * Sets `recordFile`.
+ */
 fmi2Status fmi2SetString(fmi2Component c,
                          const fmi2ValueReference *vr,
                          uintptr_t nvr,
                          const fmi2String *value);
 
+/**
+ * Saves the instance's state (a new one, or into the given one).
+ */
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate);
 
+/**
+ * Restores a saved state; stepping on gives bit-identical outputs.
+ */
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate);
 
+/**
+ * Frees a saved state and sets the pointer to NULL.
+ */
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate);
 
+/**
+ * Size in bytes of a saved state's serialized form.
+ */
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, uintptr_t *size);
 
+/**
+ * Writes a saved state in the explicit, versioned byte format.
+ */
 fmi2Status fmi2SerializeFMUstate(fmi2Component c,
                                  fmi2FMUstate FMUstate,
                                  fmi2Byte *serializedState,
                                  uintptr_t size);
 
+/**
+ * Reads a saved state from its byte format.
+ */
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c,
                                    const fmi2Byte *serializedState,
                                    uintptr_t size,
                                    fmi2FMUstate *FMUstate);
 
+/**
+ * Not provided: always an error.
+ */
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
                                         const fmi2ValueReference *_vUnknown_ref,
                                         uintptr_t _nUnknown,
@@ -167,33 +296,60 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
                                         const fmi2Real *_dvKnown,
                                         fmi2Real *_dvUnknown);
 
+/**
+ * First derivatives of `ag` and `Fext` over the next step (order 1 only).
+ */
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c,
                                        const fmi2ValueReference *vr,
                                        uintptr_t nvr,
                                        const fmi2Integer *order,
                                        const fmi2Real *value);
 
+/**
+ * Not provided (maxOutputDerivativeOrder = 0): always an error.
+ */
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c,
                                         const fmi2ValueReference *_vr,
                                         uintptr_t _nvr,
                                         const fmi2Integer *_order,
                                         fmi2Real *_value);
 
+/**
+ * Advances by one communication step (any length; events located inside).
+ */
 fmi2Status fmi2DoStep(fmi2Component c,
                       fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize,
                       fmi2Boolean _noSetFMUStatePriorToCurrentPoint);
 
+/**
+ * Nothing to cancel (steps are synchronous): always an error.
+ */
 fmi2Status fmi2CancelStep(fmi2Component c);
 
+/**
+ * fmi2DoStepStatus: always fmi2OK.
+ */
 fmi2Status fmi2GetStatus(fmi2Component c, fmi2StatusKind s, fmi2Status *value);
 
+/**
+ * fmi2LastSuccessfulTime.
+ */
 fmi2Status fmi2GetRealStatus(fmi2Component c, fmi2StatusKind s, fmi2Real *value);
 
+/**
+ * No Integer status: always an error.
+ */
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, fmi2StatusKind s, fmi2Integer *_value);
 
+/**
+ * fmi2Terminated: always false.
+ */
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, fmi2StatusKind s, fmi2Boolean *value);
 
+/**
+ * No String status: always an error.
+ */
 fmi2Status fmi2GetStringStatus(fmi2Component c, fmi2StatusKind s, fmi2String *_value);
 
 #ifdef __cplusplus

@@ -8,14 +8,23 @@ use crate::instance::{Instance, LogSink, NullSink, SavedState, Status};
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
+/// An instance, as the importer holds it.
 pub type fmi2Component = *mut c_void;
+/// The importer's pointer, passed back to its callbacks.
 pub type fmi2ComponentEnvironment = *mut c_void;
+/// A saved state.
 pub type fmi2FMUstate = *mut c_void;
+/// A variable's value reference.
 pub type fmi2ValueReference = c_uint;
+/// FMI Real.
 pub type fmi2Real = f64;
+/// FMI Integer.
 pub type fmi2Integer = c_int;
+/// FMI Boolean (0 false, otherwise true).
 pub type fmi2Boolean = c_int;
+/// FMI String (NUL-terminated UTF-8).
 pub type fmi2String = *const c_char;
+/// One byte of a serialized state.
 pub type fmi2Byte = c_char;
 /// fmi2OK = 0, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending.
 pub type fmi2Status = c_int;
@@ -24,6 +33,7 @@ pub type fmi2Type = c_int;
 /// fmi2DoStepStatus = 0, fmi2PendingStatus, fmi2LastSuccessfulTime, fmi2Terminated.
 pub type fmi2StatusKind = c_int;
 
+/// The importer's logger (variadic, printf-like).
 pub type fmi2CallbackLogger = Option<
     unsafe extern "C" fn(
         fmi2ComponentEnvironment,
@@ -34,17 +44,25 @@ pub type fmi2CallbackLogger = Option<
         ...
     ),
 >;
+/// The importer's allocator (unused: canNotUseMemoryManagementFunctions).
 pub type fmi2CallbackAllocateMemory = Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>;
+/// The importer's deallocator (unused).
 pub type fmi2CallbackFreeMemory = Option<unsafe extern "C" fn(*mut c_void)>;
+/// Asynchronous step callback (unused).
 pub type fmi2StepFinished = Option<unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2Status)>;
 
 /// The importer's callbacks (FMI 2.0 `fmi2CallbackFunctions`).
 #[repr(C)]
 pub struct fmi2CallbackFunctions {
+    /// Logger (may be NULL).
     pub logger: fmi2CallbackLogger,
+    /// Allocator (unused).
     pub allocateMemory: fmi2CallbackAllocateMemory,
+    /// Deallocator (unused).
     pub freeMemory: fmi2CallbackFreeMemory,
+    /// Step callback (unused).
     pub stepFinished: fmi2StepFinished,
+    /// Passed back to the logger.
     pub componentEnvironment: fmi2ComponentEnvironment,
 }
 
@@ -148,16 +166,19 @@ unsafe fn string_arg(s: fmi2String) -> Option<String> {
 
 // ---------------------------------------------------------------- common
 
+/// "default": the standard FMI 2.0 types.
 #[no_mangle]
 pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
     c"default".as_ptr()
 }
 
+/// "2.0".
 #[no_mangle]
 pub extern "C" fn fmi2GetVersion() -> *const c_char {
     c"2.0".as_ptr()
 }
 
+/// Turns diagnostic messages on or off (errors are always logged); categories are ignored.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetDebugLogging(
     c: fmi2Component,
@@ -170,6 +191,7 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     })
 }
 
+/// Creates an instance (Co-Simulation only; the GUID must match); NULL on failure, with a logged reason.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2Instantiate(
     instanceName: fmi2String,
@@ -220,6 +242,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
     result.unwrap_or(std::ptr::null_mut())
 }
 
+/// Frees an instance (NULL is ignored).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     if !c.is_null() {
@@ -227,6 +250,7 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     }
 }
 
+/// Sets the start time (a record starts there) and the optional stop time.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetupExperiment(
     c: fmi2Component,
@@ -242,6 +266,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     })
 }
 
+/// Enters initialization mode; parameters stay settable.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
     with(c, "fmi2EnterInitializationMode", |comp| {
@@ -249,6 +274,7 @@ pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2St
     })
 }
 
+/// Checks the parameters, reads `recordFile`, builds the simulator.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
     with(c, "fmi2ExitInitializationMode", |comp| {
@@ -256,11 +282,13 @@ pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Sta
     })
 }
 
+/// Ends the simulation; outputs stay readable.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
     with(c, "fmi2Terminate", |comp| comp.instance.terminate())
 }
 
+/// Back to the state after instantiation, with default values.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
     with(c, "fmi2Reset", |comp| comp.instance.reset())
@@ -268,6 +296,7 @@ pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
 
 // ---------------------------------------------------------------- get/set
 
+/// Reads Real variables (parameters, inputs, outputs).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetReal(
     c: fmi2Component,
@@ -282,6 +311,7 @@ pub unsafe extern "C" fn fmi2GetReal(
     })
 }
 
+/// Reads Integer variables (`nBlocks`, `solver`, `nEvents`).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetInteger(
     c: fmi2Component,
@@ -296,6 +326,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
     })
 }
 
+/// Reads Boolean variables (`stuck[j]`).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetBoolean(
     c: fmi2Component,
@@ -310,6 +341,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     })
 }
 
+/// Sets Real parameters (before initialization ends) and inputs; out-of-range values are refused by name.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetReal(
     c: fmi2Component,
@@ -324,6 +356,7 @@ pub unsafe extern "C" fn fmi2SetReal(
     })
 }
 
+/// Sets `nBlocks` (0..8) or `solver` (1 or 2).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetInteger(
     c: fmi2Component,
@@ -338,6 +371,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
     })
 }
 
+/// No settable Boolean: always an error.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetBoolean(
     c: fmi2Component,
@@ -352,6 +386,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     })
 }
 
+/// Reads String variables (`recordFile`); valid until the next call on the instance.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetString(
     c: fmi2Component,
@@ -376,6 +411,7 @@ pub unsafe extern "C" fn fmi2GetString(
     })
 }
 
+/// Sets `recordFile`.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetString(
     c: fmi2Component,
@@ -398,6 +434,7 @@ pub unsafe extern "C" fn fmi2SetString(
 
 // ---------------------------------------------------------------- FMU state
 
+/// Saves the instance's state (a new one, or into the given one).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetFMUstate(
     c: fmi2Component,
@@ -423,6 +460,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
     })
 }
 
+/// Restores a saved state; stepping on gives bit-identical outputs.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
     const F: &str = "fmi2SetFMUstate";
@@ -434,6 +472,7 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstat
     })
 }
 
+/// Frees a saved state and sets the pointer to NULL.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: fmi2Component,
@@ -448,6 +487,7 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     })
 }
 
+/// Size in bytes of a saved state's serialized form.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     c: fmi2Component,
@@ -466,6 +506,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     })
 }
 
+/// Writes a saved state in the explicit, versioned byte format.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SerializeFMUstate(
     c: fmi2Component,
@@ -495,6 +536,7 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     })
 }
 
+/// Reads a saved state from its byte format.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     c: fmi2Component,
@@ -525,6 +567,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     })
 }
 
+/// Not provided: always an error.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     c: fmi2Component,
@@ -544,6 +587,7 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
 
 // ---------------------------------------------------------------- co-simulation
 
+/// First derivatives of `ag` and `Fext` over the next step (order 1 only).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     c: fmi2Component,
@@ -563,6 +607,7 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     })
 }
 
+/// Not provided (maxOutputDerivativeOrder = 0): always an error.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     c: fmi2Component,
@@ -580,6 +625,7 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     })
 }
 
+/// Advances by one communication step (any length; events located inside).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2DoStep(
     c: fmi2Component,
@@ -593,6 +639,7 @@ pub unsafe extern "C" fn fmi2DoStep(
     })
 }
 
+/// Nothing to cancel (steps are synchronous): always an error.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     const F: &str = "fmi2CancelStep";
@@ -604,6 +651,7 @@ pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     })
 }
 
+/// fmi2DoStepStatus: always fmi2OK.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetStatus(
     c: fmi2Component,
@@ -622,6 +670,7 @@ pub unsafe extern "C" fn fmi2GetStatus(
     })
 }
 
+/// fmi2LastSuccessfulTime.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetRealStatus(
     c: fmi2Component,
@@ -640,6 +689,7 @@ pub unsafe extern "C" fn fmi2GetRealStatus(
     })
 }
 
+/// No Integer status: always an error.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetIntegerStatus(
     c: fmi2Component,
@@ -653,6 +703,7 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
     })
 }
 
+/// fmi2Terminated: always false.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetBooleanStatus(
     c: fmi2Component,
@@ -671,6 +722,7 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     })
 }
 
+/// No String status: always an error.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetStringStatus(
     c: fmi2Component,
@@ -682,4 +734,53 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
         comp.instance
             .error(F, format!("status kind {s} is not provided"))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::instance::Phase;
+
+    #[test]
+    fn a_panic_inside_a_call_becomes_fmi2_fatal_not_an_unwind() {
+        let callbacks = fmi2CallbackFunctions {
+            logger: None,
+            allocateMemory: None,
+            freeMemory: None,
+            stepFinished: None,
+            componentEnvironment: std::ptr::null_mut(),
+        };
+        let guid = CString::new(GUID).unwrap();
+        unsafe {
+            let c = fmi2Instantiate(
+                c"t".as_ptr(),
+                1,
+                guid.as_ptr(),
+                std::ptr::null(),
+                &callbacks,
+                0,
+                0,
+            );
+            assert!(!c.is_null());
+            // The same boundary every export goes through, around a failing body.
+            let status = with(c, "fmi2Test", |_| panic!("deliberate"));
+            assert_eq!(status, Status::Fatal as fmi2Status);
+            assert_eq!((*(c as *mut Component)).instance.phase(), Phase::Error);
+            // The instance survives and still answers (with an error: wrong state).
+            assert_eq!(fmi2DoStep(c, 0.0, 0.1, 1), ERROR);
+            fmi2FreeInstance(c);
+            // NULL components are refused, never dereferenced.
+            assert_eq!(fmi2DoStep(std::ptr::null_mut(), 0.0, 0.1, 1), ERROR);
+            assert!(fmi2Instantiate(
+                c"t".as_ptr(),
+                0,
+                guid.as_ptr(),
+                std::ptr::null(),
+                &callbacks,
+                0,
+                0
+            )
+            .is_null());
+        }
+    }
 }

@@ -15,26 +15,38 @@ use std::sync::Arc;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 #[repr(i32)]
 pub enum Status {
+    /// fmi2OK.
     Ok = 0,
+    /// fmi2Warning.
     Warning = 1,
+    /// fmi2Discard.
     Discard = 2,
+    /// fmi2Error.
     Error = 3,
+    /// fmi2Fatal.
     Fatal = 4,
+    /// fmi2Pending.
     Pending = 5,
 }
 
 /// Where log messages go (the importer's logger, or a test's buffer).
 pub trait LogSink {
+    /// Passes one message (already formatted).
     fn log(&self, status: Status, category: &str, message: &str);
 }
 
 /// The states of the FMI 2.0 Co-Simulation state machine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
+    /// After fmi2Instantiate or fmi2Reset.
     Instantiated,
+    /// Between fmi2EnterInitializationMode and fmi2ExitInitializationMode.
     InitializationMode,
+    /// Ready for fmi2DoStep.
     StepComplete,
+    /// After fmi2Terminate.
     Terminated,
+    /// After a failed step or a caught panic.
     Error,
 }
 
@@ -112,6 +124,7 @@ pub struct SavedState(Dynamic);
 const STATE_MAGIC: &[u8; 8] = b"SLLSTATE";
 const STATE_VERSION: u32 = 1;
 
+/// One FMU instance (see the module docs).
 pub struct Instance {
     name: String,
     logger: Box<dyn LogSink>,
@@ -148,6 +161,8 @@ pub fn resource_dir_from_uri(uri: &str) -> Option<PathBuf> {
 }
 
 impl Instance {
+    /// A new instance in state `Instantiated`; `resource_location` is the
+    /// importer's `file:` URI of the unzipped FMU's resources folder.
     pub fn new(
         name: &str,
         resource_location: Option<&str>,
@@ -165,10 +180,12 @@ impl Instance {
         }
     }
 
+    /// The instance name given by the importer.
     pub fn name(&self) -> &str {
         &self.name
     }
 
+    /// The current state of the FMI state machine.
     pub fn phase(&self) -> Phase {
         self.d.phase
     }
@@ -200,6 +217,7 @@ impl Instance {
         }
     }
 
+    /// fmi2SetDebugLogging.
     pub fn set_debug_logging(&mut self, on: bool) -> Status {
         self.debug_logging = on;
         Status::Ok
@@ -215,6 +233,7 @@ impl Instance {
         }
     }
 
+    /// fmi2SetupExperiment.
     pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Status {
         const F: &str = "fmi2SetupExperiment";
         if let Err(s) = self.require(F, &[Phase::Instantiated]) {
@@ -229,6 +248,7 @@ impl Instance {
         Status::Ok
     }
 
+    /// fmi2EnterInitializationMode.
     pub fn enter_initialization_mode(&mut self) -> Status {
         if let Err(s) = self.require("fmi2EnterInitializationMode", &[Phase::Instantiated]) {
             return s;
@@ -287,6 +307,7 @@ impl Instance {
         }
     }
 
+    /// fmi2ExitInitializationMode: builds the simulator, reads the record.
     pub fn exit_initialization_mode(&mut self) -> Status {
         const F: &str = "fmi2ExitInitializationMode";
         if let Err(s) = self.require(F, &[Phase::InitializationMode]) {
@@ -299,6 +320,7 @@ impl Instance {
         Status::Ok
     }
 
+    /// fmi2Terminate.
     pub fn terminate(&mut self) -> Status {
         if let Err(s) = self.require(
             "fmi2Terminate",
@@ -363,6 +385,7 @@ impl Instance {
         self.error(func, e.to_string())
     }
 
+    /// fmi2SetReal.
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         const F: &str = "fmi2SetReal";
         for (&vr, &x) in vrs.iter().zip(values) {
@@ -400,6 +423,7 @@ impl Instance {
         Status::Ok
     }
 
+    /// fmi2SetInteger.
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
         const F: &str = "fmi2SetInteger";
         for (&vr, &x) in vrs.iter().zip(values) {
@@ -421,6 +445,7 @@ impl Instance {
         Status::Ok
     }
 
+    /// fmi2SetBoolean (nothing is settable).
     pub fn set_boolean(&mut self, vrs: &[u32], _values: &[i32]) -> Status {
         const F: &str = "fmi2SetBoolean";
         for &vr in vrs {
@@ -433,6 +458,7 @@ impl Instance {
         Status::Ok
     }
 
+    /// fmi2SetString.
     pub fn set_string(&mut self, vrs: &[u32], values: &[String]) -> Status {
         const F: &str = "fmi2SetString";
         for (&vr, x) in vrs.iter().zip(values) {
@@ -476,6 +502,7 @@ impl Instance {
         )
     }
 
+    /// fmi2GetReal.
     pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Status {
         const F: &str = "fmi2GetReal";
         if let Err(s) = self.readable(F) {
@@ -532,6 +559,7 @@ impl Instance {
         Status::Ok
     }
 
+    /// fmi2GetInteger.
     pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
         const F: &str = "fmi2GetInteger";
         if let Err(s) = self.readable(F) {
@@ -552,6 +580,7 @@ impl Instance {
         Status::Ok
     }
 
+    /// fmi2GetBoolean.
     pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
         const F: &str = "fmi2GetBoolean";
         if let Err(s) = self.readable(F) {
@@ -570,6 +599,7 @@ impl Instance {
         Status::Ok
     }
 
+    /// fmi2GetString.
     pub fn get_string(&mut self, vrs: &[u32]) -> Result<Vec<String>, Status> {
         const F: &str = "fmi2GetString";
         self.readable(F)?;
@@ -627,6 +657,7 @@ impl Instance {
         Status::Ok
     }
 
+    /// fmi2DoStep.
     pub fn do_step(&mut self, t: f64, h: f64) -> Status {
         const F: &str = "fmi2DoStep";
         if let Err(s) = self.require(F, &[Phase::StepComplete]) {
@@ -689,6 +720,7 @@ impl Instance {
 
     // ---- saved states ----
 
+    /// fmi2GetFMUstate.
     pub fn save(&mut self) -> Result<SavedState, Status> {
         self.require(
             "fmi2GetFMUstate",
@@ -702,6 +734,7 @@ impl Instance {
         Ok(SavedState(self.d.clone()))
     }
 
+    /// fmi2SetFMUstate (re-reads the record if the state names another).
     pub fn restore(&mut self, state: &SavedState) -> Status {
         const F: &str = "fmi2SetFMUstate";
         if let Err(s) = self.require(
@@ -754,6 +787,7 @@ impl Instance {
         w.buf
     }
 
+    /// Reads the byte format of [`Instance::serialize`].
     pub fn deserialize(bytes: &[u8]) -> Result<SavedState, SnapshotError> {
         let magic = bytes.get(..8).ok_or("the saved state is truncated")?;
         if magic != STATE_MAGIC {

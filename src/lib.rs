@@ -12,6 +12,8 @@
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
 //! - [`synthetic`]: the embedded default ground motion.
 
+#![warn(missing_docs)]
+
 pub mod engine;
 pub mod fmi2;
 pub mod hermite;

@@ -4,25 +4,32 @@
 /// Appends fields to a byte buffer.
 #[derive(Default)]
 pub struct ByteWriter {
+    /// The bytes written so far.
     pub buf: Vec<u8>,
 }
 
 impl ByteWriter {
+    /// One byte.
     pub fn u8(&mut self, x: u8) {
         self.buf.push(x);
     }
+    /// A little-endian u32.
     pub fn u32(&mut self, x: u32) {
         self.buf.extend_from_slice(&x.to_le_bytes());
     }
+    /// A little-endian u64.
     pub fn u64(&mut self, x: u64) {
         self.buf.extend_from_slice(&x.to_le_bytes());
     }
+    /// A little-endian f64 (bit exact).
     pub fn f64(&mut self, x: f64) {
         self.buf.extend_from_slice(&x.to_le_bytes());
     }
+    /// Several f64 in order.
     pub fn f64s(&mut self, xs: &[f64]) {
         xs.iter().for_each(|&x| self.f64(x));
     }
+    /// A length-prefixed UTF-8 string.
     pub fn str(&mut self, s: &str) {
         self.u32(s.len() as u32);
         self.buf.extend_from_slice(s.as_bytes());
@@ -38,6 +45,7 @@ pub struct ByteReader<'a> {
 pub type SnapshotError = String;
 
 impl<'a> ByteReader<'a> {
+    /// Reads from `bytes`.
     pub fn new(bytes: &'a [u8]) -> Self {
         ByteReader { bytes }
     }
@@ -49,24 +57,30 @@ impl<'a> ByteReader<'a> {
         self.bytes = rest;
         Ok(head.try_into().expect("length checked"))
     }
+    /// One byte.
     pub fn u8(&mut self) -> Result<u8, SnapshotError> {
         Ok(self.take::<1>()?[0])
     }
+    /// A little-endian u32.
     pub fn u32(&mut self) -> Result<u32, SnapshotError> {
         Ok(u32::from_le_bytes(self.take()?))
     }
+    /// A little-endian u64.
     pub fn u64(&mut self) -> Result<u64, SnapshotError> {
         Ok(u64::from_le_bytes(self.take()?))
     }
+    /// A little-endian f64.
     pub fn f64(&mut self) -> Result<f64, SnapshotError> {
         Ok(f64::from_le_bytes(self.take()?))
     }
+    /// Fills `out` in order.
     pub fn f64s(&mut self, out: &mut [f64]) -> Result<(), SnapshotError> {
         for x in out.iter_mut() {
             *x = self.f64()?;
         }
         Ok(())
     }
+    /// A length-prefixed UTF-8 string.
     pub fn str(&mut self) -> Result<String, SnapshotError> {
         let n = self.u32()? as usize;
         if self.bytes.len() < n {
@@ -76,6 +90,7 @@ impl<'a> ByteReader<'a> {
         self.bytes = rest;
         String::from_utf8(head.to_vec()).map_err(|_| "a saved string is not UTF-8".into())
     }
+    /// Whether every byte has been read.
     pub fn is_empty(&self) -> bool {
         self.bytes.is_empty()
     }

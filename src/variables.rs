@@ -4,7 +4,9 @@
 
 use crate::params::{Params, MAX_BLOCKS};
 
-/// What a variable is.
+/// What a variable is. Each variant is the FMU variable of the same name
+/// (see [`Id::name`]); indexed variants carry the block / interface number 1..=8.
+#[allow(missing_docs)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Id {
     // Real parameters
@@ -49,6 +51,7 @@ pub enum Id {
 }
 
 /// FMI base type.
+#[allow(missing_docs)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
     Real,
@@ -57,6 +60,8 @@ pub enum Kind {
     String,
 }
 
+/// FMI causality of a variable.
+#[allow(missing_docs)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Causality {
     Parameter,
@@ -191,6 +196,7 @@ impl Id {
         }
     }
 
+    /// The FMI base type.
     pub fn kind(self) -> Kind {
         match self {
             Id::NBlocks | Id::Solver | Id::NEvents => Kind::Integer,
@@ -200,6 +206,7 @@ impl Id {
         }
     }
 
+    /// Parameter, input or output.
     pub fn causality(self) -> Causality {
         match self {
             Id::Mp
@@ -223,8 +230,11 @@ impl Id {
 /// One row of the table, as the model description shows it.
 #[derive(Clone, Debug)]
 pub struct Variable {
+    /// What it is.
     pub id: Id,
+    /// Its public name.
     pub name: String,
+    /// Its description in the model description.
     pub description: String,
     /// A `SimpleType` of [`TYPES`], for Reals.
     pub declared_type: Option<&'static str>,
