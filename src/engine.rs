@@ -244,39 +244,6 @@ impl Segment<'_> {
         }
     }
 
-    /// Displacement increment of cluster `c` over `tau`.
-    #[inline]
-    fn displacement_increment(&self, c: usize, x: &Structure, tau: f64) -> f64 {
-        if c == 0 {
-            x[0] - self.u[0]
-        } else {
-            let d = self.dynamics;
-            let relative_accel = d.accel_const[c] - self.ag0;
-            tau * (self.v[d.bottom[c]]
-                + tau * (0.5 * relative_accel - tau * self.exc.ag_rate / 6.0))
-        }
-    }
-
-    /// Input work `-M ∫ ag v dt` on the clusters above the structure's over `tau`.
-    fn upper_input_work(&self, tau: f64) -> f64 {
-        let d = self.dynamics;
-        if d.n_clusters == 1 {
-            return 0.0;
-        }
-        let x = self.start(); // not used by clusters c >= 1
-        let (ag_a, _) = self.inputs(self.t0);
-        let (ag_m, _) = self.inputs(self.t0 + 0.5 * tau);
-        let (ag_b, _) = self.inputs(self.t0 + tau);
-        (1..d.n_clusters)
-            .map(|c| {
-                let simpson = ag_a * self.velocity(c, &x, 0.0)
-                    + 4.0 * ag_m * self.velocity(c, &x, 0.5 * tau)
-                    + ag_b * self.velocity(c, &x, tau);
-                -d.mass[c] * tau / 6.0 * simpson
-            })
-            .sum()
-    }
-
     /// Guard of interface j at `t0 + tau`: positive while its contact state holds.
     fn guard(&self, j: usize, x: &Structure, tau: f64) -> f64 {
         let d = self.dynamics;
@@ -550,14 +517,25 @@ impl Simulator {
     fn accept(&mut self, x1: &Structure, h: f64, exc: &Excitation, t_ref: f64) {
         let n = self.sys.n;
         let (mut du, mut v_end) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
-        let upper_work = {
-            let seg = self.segment(exc, t_ref);
-            for c in 0..self.dynamics.n_clusters {
-                du[c] = seg.displacement_increment(c, x1, h);
-                v_end[c] = seg.velocity(c, x1, h);
+        du[0] = x1[0] - self.u[0];
+        v_end[0] = x1[1];
+        // Clusters above the structure's: exact polynomials in time (what RK4
+        // gives them), and Simpson's rule, exact, for their input work.
+        let mut upper_work = 0.0;
+        let nc = self.dynamics.n_clusters;
+        if nc > 1 {
+            let d = &self.dynamics;
+            let ag0 = exc.ag + exc.ag_rate * (self.t - t_ref);
+            let (agm, ag1) = (ag0 + 0.5 * h * exc.ag_rate, ag0 + h * exc.ag_rate);
+            for c in 1..nc {
+                let v = self.v[d.bottom[c]];
+                let rel = d.accel_const[c] - ag0;
+                let vm = v + 0.5 * h * rel - 0.125 * h * h * exc.ag_rate;
+                v_end[c] = v + h * rel - 0.5 * h * h * exc.ag_rate;
+                du[c] = h * (v + h * (0.5 * rel - h * exc.ag_rate / 6.0));
+                upper_work -= d.mass[c] * h / 6.0 * (ag0 * v + 4.0 * agm * vm + ag1 * v_end[c]);
             }
-            seg.upper_input_work(h)
-        };
+        }
         let (a0_start, jerk_start) = self.structure_accel_and_jerk(exc, t_ref, self.t);
         let (u0_start, v0_start) = (self.u[0], self.v[0]);
         let d = &self.dynamics;
@@ -754,13 +732,10 @@ impl Simulator {
                 let seg = self.segment(exc, t_ref);
                 let (x0, x1) = (seg.start(), seg.structure_after(h));
                 let mut earliest: Option<(f64, usize)> = None;
-                for j in 1..=self.sys.n {
-                    // A stick above the structure's cluster carries a constant
-                    // force for the whole mode: its guard cannot cross.
-                    let constant = self.mode.is_stuck(j) && self.dynamics.cluster_of[j] != 0;
-                    if muted & (1 << j) != 0 || self.sys.is_free(j) || constant {
-                        continue;
-                    }
+                let mut candidates = self.dynamics.changing_guards & !muted;
+                while candidates != 0 {
+                    let j = candidates.trailing_zeros() as usize;
+                    candidates &= candidates - 1;
                     let g1 = seg.guard(j, &x1, h);
                     if g1 >= 0.0 {
                         continue;

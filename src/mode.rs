@@ -90,6 +90,10 @@ pub struct Dynamics {
     pub accel_const: [f64; MAX_BODIES],
     /// 1 / mass of the structure's cluster.
     pub inv_mass0: f64,
+    /// Interfaces (bit j) whose guard can change sign within the mode:
+    /// slipping ones, and stuck ones in the structure's cluster. A stick
+    /// higher up carries a constant force; a free interface has no guard.
+    pub changing_guards: u32,
 }
 
 impl Dynamics {
@@ -106,6 +110,7 @@ impl Dynamics {
             mass_above: [0.0; MAX_BODIES],
             accel_const: [0.0; MAX_BODIES],
             inv_mass0: 0.0,
+            changing_guards: 0,
         };
         for i in 0..=sys.n {
             if i == 0 || !mode.is_stuck(i) {
@@ -129,6 +134,12 @@ impl Dynamics {
             d.accel_const[c] = d.slip_load[c] / d.mass[c];
         }
         d.inv_mass0 = 1.0 / d.mass[0];
+        for j in 1..=sys.n {
+            let constant = mode.is_stuck(j) && d.cluster_of[j] != 0;
+            if !sys.is_free(j) && !constant {
+                d.changing_guards |= 1 << j;
+            }
+        }
         for c in 0..d.n_clusters {
             let mut above = 0.0;
             for j in (d.bottom[c]..=d.top[c]).rev() {
