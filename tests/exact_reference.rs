@@ -59,6 +59,20 @@ fn records() -> Vec<(&'static str, GroundMotion)> {
     ]
 }
 
+/// Runs the record and returns the largest |energy residual| over its
+/// samples, relative to the record's input energy (its largest value): early
+/// on, when almost nothing has been put in, the residual's absolute floor
+/// (~1e-9 J) says nothing about the balance.
+fn energy_residual_over_record(s: &mut Simulator, gm: &GroundMotion) -> f64 {
+    let (mut residual, mut input) = (0.0f64, 0.0f64);
+    run_sampled(s, gm, |s| {
+        let o = s.outputs();
+        input = input.max(o.e_input.abs());
+        residual = residual.max(o.energy_residual().abs());
+    });
+    residual / input
+}
+
 #[test]
 fn default_settings_meet_the_accuracy_target() {
     // Issue #2 target: peaks of |u0| and |slip_j| within 1e-6 relative of the exact
@@ -75,18 +89,12 @@ fn default_settings_meet_the_accuracy_target() {
                 p.tp = tp;
                 let exact = Exact::new(&p).run(&gm, 16);
                 let mut s = Simulator::new(&p, &Settings::default()).unwrap();
-                let (mut residual, mut input) = (0.0f64, 0.0f64);
-                run_sampled(&mut s, &gm, |s| {
-                    let o = s.outputs();
-                    input = input.max(o.e_input.abs());
-                    residual = residual.max(o.energy_residual().abs());
-                });
+                let e_energy = energy_residual_over_record(&mut s, &gm);
                 let o = s.outputs();
                 let e_u0 = rel(o.peak_up, exact.peak_u0);
                 let e_slip = (0..p.n_blocks)
                     .map(|j| rel_slip(o.peak_slip[j], exact.peak_slip[j]))
                     .fold(0.0, f64::max);
-                let e_energy = residual / input;
                 let what = format!("{rname} / {sname} / Tp {tp}");
                 assert!(
                     e_u0 < 1e-6 && e_slip < 1e-6,
@@ -112,19 +120,10 @@ fn default_settings_meet_the_accuracy_target() {
 #[test]
 fn energy_balance_closes_at_every_sample() {
     // MODEL.md energy balance; issue #2: to 1e-8 of the input energy, N = 1, 2, 4.
-    // The residual at every sample is compared with the record's input energy
-    // (its largest value): early on, when almost nothing has been put in, the
-    // residual's absolute floor (~1e-9 J here) says nothing about the balance.
     let gm = broadband(20.0, 0.005, 0.5 * 9.81);
     for (name, p) in scenes() {
         let mut s = Simulator::new(&p, &Settings::default()).unwrap();
-        let (mut residual, mut input) = (0.0f64, 0.0f64);
-        run_sampled(&mut s, &gm, |s| {
-            let o = s.outputs();
-            input = input.max(o.e_input.abs());
-            residual = residual.max(o.energy_residual().abs());
-        });
-        let worst = residual / input;
+        let worst = energy_residual_over_record(&mut s, &gm);
         let o = s.outputs();
         eprintln!(
             "{name:20} residual/input {worst:.1e}, friction share {:.2}",

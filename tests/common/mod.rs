@@ -374,12 +374,7 @@ impl Exact {
             was_stuck,
             load0: -self.k * z[0] - self.c * z[m],
         };
-        let before = *mode;
         *mode = mode::resolve(&self.sys, &req).mode;
-        if std::env::var("EXACT_DEBUG").is_ok() {
-            let (_, f) = self.chain(&before, z[0], z[m]);
-            eprintln!("exact switch: u0 {:.4e} v {:?} F {:?} {:?} -> {:?} must_break {must_break:b} zero {zero:b}", z[0], (0..m).map(|i| z[m+i]).collect::<Vec<_>>(), f.as_slice(), &before.contact[1..m], &mode.contact[1..m]);
-        }
     }
 
     /// Peak |u0| and |slip| between two exact samples: at the ends and where
