@@ -27,6 +27,28 @@ pub struct Excitation {
     pub fext_rate: f64,
 }
 
+impl Excitation {
+    /// Checks that a step from `now` to `t_end` under this piece is possible:
+    /// every value finite and time not going back.
+    pub fn check(&self, now: f64, t_end: f64) -> Result<(), SimError> {
+        for (name, value) in [
+            ("ag", self.ag),
+            ("der(ag)", self.ag_rate),
+            ("Fext", self.fext),
+            ("der(Fext)", self.fext_rate),
+            ("t_end", t_end),
+        ] {
+            if !value.is_finite() {
+                return Err(SimError::BadInput { name, value });
+            }
+        }
+        if t_end < now {
+            return Err(SimError::BadTime { now, t_end });
+        }
+        Ok(())
+    }
+}
+
 /// RK4 step limit for the bare structure: stability needs `h ω_p < 2.83`
 /// (undamped); we keep a margin.
 pub const STABLE_H_OMEGA: f64 = 2.5;
@@ -116,6 +138,9 @@ pub struct Stats {
     pub inconsistent: u64,
     /// Guards muted by the chatter guard (switched at the step end instead).
     pub muted: u64,
+    /// Resolutions where several assignments were consistent (possible only
+    /// with mus > muk) and the selection rule chose.
+    pub ambiguous: u64,
 }
 
 /// Everything the product reports at the current time. Block arrays are
@@ -162,8 +187,11 @@ pub struct Outputs {
     pub e_friction: f64,
     /// Energy dissipated by friction at each interface (J).
     pub e_friction_of: [f64; MAX_BLOCKS],
-    /// Mode switches so far.
+    /// Mode switches so far (for the regularized baseline: internal steps
+    /// over which a relative velocity changed sign).
     pub n_events: u64,
+    /// Mode resolutions decided by the mus > muk selection rule.
+    pub n_ambiguous: u64,
 }
 
 impl Outputs {
@@ -455,20 +483,7 @@ impl Simulator {
     /// Advances to `t_end` under an excitation that is linear over
     /// `[now, t_end]` (values given at the current time).
     pub fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
-        for (name, value) in [
-            ("ag", exc.ag),
-            ("der(ag)", exc.ag_rate),
-            ("Fext", exc.fext),
-            ("der(Fext)", exc.fext_rate),
-            ("t_end", t_end),
-        ] {
-            if !value.is_finite() {
-                return Err(SimError::BadInput { name, value });
-            }
-        }
-        if t_end < self.t {
-            return Err(SimError::BadTime { now: self.t, t_end });
-        }
+        exc.check(self.t, t_end)?;
         let t_ref = self.t;
         if exc.fext != self.fext_now {
             // A jump in the external force can break a stick (ag cannot).
@@ -624,6 +639,8 @@ impl Simulator {
         let res = mode::resolve(&self.sys, &req);
         if !res.consistent {
             self.stats.inconsistent += 1;
+        } else if req.zero != 0 && mode::consistent_count(&self.sys, &req) > 1 {
+            self.stats.ambiguous += 1;
         }
         if res.mode != self.mode {
             self.stats.events += 1;
@@ -832,7 +849,7 @@ impl Simulator {
         w.f64s(&self.peak_slip);
         w.f64s(&[self.peak_a0, self.ag_now, self.fext_now, self.last_event]);
         let s = &self.stats;
-        for x in [s.steps, s.events, s.inconsistent, s.muted] {
+        for x in [s.steps, s.events, s.inconsistent, s.muted, s.ambiguous] {
             w.u64(x);
         }
     }
@@ -876,6 +893,7 @@ impl Simulator {
             events: r.u64()?,
             inconsistent: r.u64()?,
             muted: r.u64()?,
+            ambiguous: r.u64()?,
         };
         Ok(sim)
     }
@@ -897,6 +915,7 @@ impl Simulator {
             e_strain: 0.5 * s.k * self.u[0] * self.u[0],
             e_viscous: self.e_viscous,
             n_events: self.stats.events,
+            n_ambiguous: self.stats.ambiguous,
             ..Outputs::default()
         };
         o.e_kinetic = (0..=s.n)

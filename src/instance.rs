@@ -3,8 +3,9 @@
 //! simulator, status queries and saved states. The C ABI in [`crate::fmi2`]
 //! only checks pointers, converts arguments and calls in here.
 
-use crate::engine::{Excitation, Outputs, Simulator};
-use crate::params::{check_scalar, Method, ParamError, Params, Settings, MAX_BLOCKS};
+use crate::engine::{Excitation, Outputs};
+use crate::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
+use crate::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
 use crate::record::{self, GroundMotion};
 use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::variables::{Causality, Id};
@@ -58,6 +59,7 @@ struct ParameterValues {
     record_scale: f64,
     solver: i32,
     max_step: f64,
+    friction_eps: f64,
 }
 
 impl Default for ParameterValues {
@@ -68,20 +70,15 @@ impl Default for ParameterValues {
             record_scale: 1.0,
             solver: 1,
             max_step: 0.0,
+            friction_eps: DEFAULT_FRICTION_EPS,
         }
     }
 }
 
 impl ParameterValues {
-    fn settings(&self) -> Settings {
-        Settings {
-            method: if self.solver == 2 {
-                Method::StepEnd
-            } else {
-                Method::EventLocated
-            },
-            max_step: self.max_step,
-        }
+    fn build(&self) -> Result<Solver, ParamError> {
+        let kind = SolverKind::from_code(self.solver).unwrap_or(SolverKind::EventLocated);
+        Solver::new(&self.params, kind, self.max_step, self.friction_eps)
     }
 }
 
@@ -97,7 +94,7 @@ struct Dynamic {
     fext: f64,
     der_ag: f64,
     der_fext: f64,
-    sim: Option<Simulator>,
+    sim: Option<Solver>,
 }
 
 impl Dynamic {
@@ -122,7 +119,7 @@ impl Dynamic {
 pub struct SavedState(Dynamic);
 
 const STATE_MAGIC: &[u8; 8] = b"SLLSTATE";
-const STATE_VERSION: u32 = 1;
+const STATE_VERSION: u32 = 2;
 
 /// One FMU instance (see the module docs).
 pub struct Instance {
@@ -261,7 +258,7 @@ impl Instance {
     /// Builds the simulator from the parameters (and reads the record).
     fn build(&mut self, func: &str) -> Result<(), Status> {
         let values = self.d.values.clone();
-        let mut sim = match Simulator::new(&values.params, &values.settings()) {
+        let mut sim = match values.build() {
             Ok(sim) => sim,
             Err(e) => return Err(self.error(func, e.to_string())),
         };
@@ -409,6 +406,7 @@ impl Instance {
                 Id::G => v.params.g = x,
                 Id::RecordScale => v.record_scale = x,
                 Id::MaxStep => v.max_step = x,
+                Id::FrictionEps => v.friction_eps = x,
                 Id::Alpha(j) => v.params.alpha[j - 1] = x,
                 Id::Mus(j) => v.params.mus[j - 1] = x,
                 Id::Muk(j) => v.params.muk[j - 1] = x,
@@ -436,8 +434,8 @@ impl Instance {
                     self.d.values.params.n_blocks = x as usize
                 }
                 Id::NBlocks => return self.error(F, format!("nBlocks = {x} is not allowed: it must be an integer from 0 to {MAX_BLOCKS}")),
-                Id::Solver if x == 1 || x == 2 => self.d.values.solver = x,
-                Id::Solver => return self.error(F, format!("solver = {x} is not allowed: it must be 1 (event-located RK4) or 2 (step-end switching)")),
+                Id::Solver if SolverKind::from_code(x).is_some() => self.d.values.solver = x,
+                Id::Solver => return self.error(F, format!("solver = {x} is not allowed: it must be 1 (event-located RK4), 2 (step-end switching) or 3 (tanh-regularized friction)")),
                 _ => return self.error(F, format!("{} is not an Integer", name_of(id))),
             }
             self.d.sim = None;
@@ -448,14 +446,13 @@ impl Instance {
     /// fmi2SetBoolean (nothing is settable).
     pub fn set_boolean(&mut self, vrs: &[u32], _values: &[i32]) -> Status {
         const F: &str = "fmi2SetBoolean";
-        for &vr in vrs {
-            let id = match self.target(F, vr) {
-                Ok(id) => id,
-                Err(s) => return s,
-            };
-            return self.error(F, format!("{} is not a settable Boolean", name_of(id)));
+        // The first reference decides: it is unknown, not settable now, or
+        // a Boolean output.
+        match vrs.first().map(|&vr| self.target(F, vr)) {
+            None => Status::Ok,
+            Some(Err(s)) => s,
+            Some(Ok(id)) => self.error(F, format!("{} is not a settable Boolean", name_of(id))),
         }
-        Status::Ok
     }
 
     /// fmi2SetString.
@@ -523,6 +520,7 @@ impl Instance {
                 Id::G => p.g,
                 Id::RecordScale => v.record_scale,
                 Id::MaxStep => v.max_step,
+                Id::FrictionEps => v.friction_eps,
                 Id::Alpha(j) => block(j, &p.alpha),
                 Id::Mus(j) => block(j, &p.mus),
                 Id::Muk(j) => block(j, &p.muk),
@@ -571,6 +569,10 @@ impl Instance {
                 Ok(Id::Solver) => self.d.values.solver,
                 Ok(Id::NEvents) => match self.current_outputs(F) {
                     Ok(o) => o.n_events.min(i32::MAX as u64) as i32,
+                    Err(s) => return s,
+                },
+                Ok(Id::NAmbiguous) => match self.current_outputs(F) {
+                    Ok(o) => o.n_ambiguous.min(i32::MAX as u64) as i32,
                     Err(s) => return s,
                 },
                 Ok(id) => return self.error(F, format!("{} is not an Integer", name_of(id))),
@@ -769,7 +771,7 @@ impl Instance {
         w.f64s(&[d.start_time, d.stop_time.unwrap_or(f64::NAN), d.time]);
         let v = &d.values;
         w.str(&v.record_file);
-        w.f64s(&[v.record_scale, v.max_step]);
+        w.f64s(&[v.record_scale, v.max_step, v.friction_eps]);
         w.u32(v.solver as u32);
         w.f64s(&[d.ag, d.fext, d.der_ag, d.der_fext]);
         // The parameters travel with the simulator when it exists; before
@@ -813,13 +815,14 @@ impl Instance {
             record_file: r.str()?,
             record_scale: r.f64()?,
             max_step: r.f64()?,
+            friction_eps: r.f64()?,
             solver: r.u32()? as i32,
             ..ParameterValues::default()
         };
         let (ag, fext, der_ag, der_fext) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
         let sim = match r.u8()? {
             1 => {
-                let sim = Simulator::read_state(&mut r)?;
+                let sim = Solver::read_state(&mut r)?;
                 values.params = sim.params().clone();
                 Some(sim)
             }

@@ -9,6 +9,7 @@
 //! - [`engine`]: RK4 with located events, peaks and energies.
 //! - [`record`]: ground-motion files and driving a simulation through one.
 //! - [`regularized`]: tanh-regularized friction with plain RK4, a baseline.
+//! - [`solver`]: the FMU's three solver choices behind one type.
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
 //! - [`synthetic`]: the embedded default ground motion.
 
@@ -25,6 +26,7 @@ pub mod record;
 pub mod regularized;
 pub mod sdof;
 pub mod snapshot;
+pub mod solver;
 pub mod synthetic;
 pub mod system;
 pub mod variables;

@@ -329,6 +329,37 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     }
 }
 
+/// Number of consistent assignments of the interfaces in `req.zero` (every
+/// stick / forward / backward combination), for statistics: more than one
+/// means the selection rule of [`resolve`] decided. Only mus > muk can make
+/// it exceed one, so the enumeration (3^k modes) is skipped otherwise.
+pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
+    let mut list = [0usize; MAX_BODIES];
+    let mut k = 0;
+    for j in (1..=sys.n).filter(|&j| req.zero & (1 << j) != 0 && !sys.is_free(j)) {
+        list[k] = j;
+        k += 1;
+    }
+    let zero = &list[..k];
+    if zero.iter().all(|&j| sys.mus[j] == sys.muk[j]) {
+        return 1;
+    }
+    let mut count = 0;
+    for code in 0..3u32.pow(k as u32) {
+        let mut mode = req.mode;
+        let mut rest = code;
+        for &j in zero {
+            mode.contact[j] = [Contact::Stuck, Contact::SlipForward, Contact::SlipBackward]
+                [(rest % 3) as usize];
+            rest /= 3;
+        }
+        if violation(sys, &mode, req.zero, req.load0) <= CONSISTENCY_TOL {
+            count += 1;
+        }
+    }
+    count
+}
+
 /// Maps bit b of `bits` to interface `list[b]` as a bit mask over interfaces.
 fn bits_to_ifaces(bits: u32, list: &[usize]) -> u32 {
     list.iter()

@@ -97,6 +97,7 @@ pub fn check_scalar(field: &str, value: f64) -> Result<(), ParamError> {
         "zeta" => ((0.0..1.0).contains(&value), "finite, >= 0 and < 1"),
         "mus" | "muk" => (value >= 0.0, "finite and >= 0"),
         "maxStep" => (value >= 0.0, "finite and >= 0 (0 = automatic)"),
+        "frictionEps" => (value > 0.0, "finite and > 0"),
         _ => (true, "finite"),
     };
     check(field, value, ok, allowed)

@@ -5,7 +5,8 @@
 //! linear, before the first and after the last it is zero. An `.AT2` file's
 //! first value is at t = 0 and the n-th at n DT.
 
-use crate::engine::{Excitation, SimError, Simulator};
+use crate::engine::{Excitation, SimError};
+use crate::solver::Stepper;
 use std::fmt;
 use std::path::Path;
 
@@ -294,8 +295,8 @@ fn parse_csv(text: &str, file: &str) -> Result<GroundMotion, RecordError> {
 /// Drives `sim` from its current time to `t_end` under `scale * record`
 /// plus `extra` (linear from the current time), splitting at every sample
 /// so that each piece is linear.
-pub fn advance_with_record(
-    sim: &mut Simulator,
+pub fn advance_with_record<S: Stepper>(
+    sim: &mut S,
     t_end: f64,
     record: &GroundMotion,
     scale: f64,
@@ -321,7 +322,7 @@ pub fn advance_with_record(
 }
 
 /// Runs a whole record from the simulator's current time to the record's end.
-pub fn run(sim: &mut Simulator, record: &GroundMotion, scale: f64) -> Result<(), SimError> {
+pub fn run<S: Stepper>(sim: &mut S, record: &GroundMotion, scale: f64) -> Result<(), SimError> {
     advance_with_record(
         sim,
         record.duration(),

@@ -9,13 +9,16 @@
 use crate::engine::{Excitation, Outputs, SimError};
 use crate::hermite;
 use crate::params::{ParamError, Params, MAX_BODIES};
+use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::system::System;
 
 /// Full state: u and v of every body, then input, viscous and friction work.
 const STATE: usize = 2 * MAX_BODIES + 3;
 
 /// A scene with regularized friction.
+#[derive(Clone, Debug)]
 pub struct RegularizedSimulator {
+    params: Params,
     sys: System,
     eps: f64,
     step: f64,
@@ -25,6 +28,9 @@ pub struct RegularizedSimulator {
     peak_slip: [f64; MAX_BODIES],
     peak_a0: f64,
     fext_now: f64,
+    /// Internal steps over which some relative velocity changed sign: the
+    /// chatter of a regularized law (it has no modes to switch).
+    sign_changes: u64,
 }
 
 impl RegularizedSimulator {
@@ -42,6 +48,7 @@ impl RegularizedSimulator {
             }
         }
         Ok(RegularizedSimulator {
+            params: params.clone(),
             sys,
             eps,
             step,
@@ -51,7 +58,44 @@ impl RegularizedSimulator {
             peak_slip: [0.0; MAX_BODIES],
             peak_a0: 0.0,
             fext_now: 0.0,
+            sign_changes: 0,
         })
+    }
+
+    /// The scene.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Internal steps over which some interface's relative velocity changed sign.
+    pub fn sign_changes(&self) -> u64 {
+        self.sign_changes
+    }
+
+    /// Writes the whole dynamic state (and the scene and settings).
+    pub fn write_state(&self, w: &mut ByteWriter) {
+        self.params.write(w);
+        w.f64s(&[self.eps, self.step, self.t]);
+        w.f64s(&self.y);
+        w.f64(self.peak_u0);
+        w.f64s(&self.peak_slip);
+        w.f64s(&[self.peak_a0, self.fext_now]);
+        w.u64(self.sign_changes);
+    }
+
+    /// Reads a state written by [`RegularizedSimulator::write_state`].
+    pub fn read_state(r: &mut ByteReader) -> Result<RegularizedSimulator, SnapshotError> {
+        let p = Params::read(r)?;
+        let (eps, step) = (r.f64()?, r.f64()?);
+        let mut s = RegularizedSimulator::new(&p, eps, step).map_err(|e| e.to_string())?;
+        s.t = r.f64()?;
+        r.f64s(&mut s.y)?;
+        s.peak_u0 = r.f64()?;
+        r.f64s(&mut s.peak_slip)?;
+        s.peak_a0 = r.f64()?;
+        s.fext_now = r.f64()?;
+        s.sign_changes = r.u64()?;
+        Ok(s)
     }
 
     /// Current time (s).
@@ -104,9 +148,7 @@ impl RegularizedSimulator {
 
     /// Advances to `t_end` under an excitation linear over `[now, t_end]`.
     pub fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
-        if t_end < self.t {
-            return Err(SimError::BadTime { now: self.t, t_end });
-        }
+        exc.check(self.t, t_end)?;
         let t_ref = self.t;
         let at = |t: f64| {
             (
@@ -138,6 +180,12 @@ impl RegularizedSimulator {
                 y1[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
             }
             self.track_peaks(&y0, &y1, h, f0, f1);
+            let m = MAX_BODIES;
+            let flipped = (1..=self.sys.n).any(|j| {
+                let (r0, r1) = (y0[m + j] - y0[m + j - 1], y1[m + j] - y1[m + j - 1]);
+                r0 * r1 < 0.0
+            });
+            self.sign_changes += u64::from(flipped);
             self.y = y1;
         }
         self.t = t_end;
@@ -185,6 +233,7 @@ impl RegularizedSimulator {
             e_strain: 0.5 * s.k * y[0] * y[0],
             e_viscous: y[e + 1],
             e_friction: y[e + 2],
+            n_events: self.sign_changes,
             ..Outputs::default()
         };
         for j in 1..=s.n {

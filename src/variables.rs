@@ -16,6 +16,7 @@ pub enum Id {
     G,
     RecordScale,
     MaxStep,
+    FrictionEps,
     Alpha(usize),
     Mus(usize),
     Muk(usize),
@@ -44,6 +45,7 @@ pub enum Id {
     NBlocks,
     Solver,
     NEvents,
+    NAmbiguous,
     // Booleans
     Stuck(usize),
     // Strings
@@ -83,6 +85,7 @@ impl Id {
             Id::G => 4,
             Id::RecordScale => 5,
             Id::MaxStep => 6,
+            Id::FrictionEps => 7,
             Id::Alpha(j) => at(10, j),
             Id::Mus(j) => at(20, j),
             Id::Muk(j) => at(30, j),
@@ -108,6 +111,7 @@ impl Id {
             Id::NBlocks => 400,
             Id::Solver => 401,
             Id::NEvents => 402,
+            Id::NAmbiguous => 403,
             Id::Stuck(j) => at(500, j),
             Id::RecordFile => 600,
         }
@@ -125,6 +129,7 @@ impl Id {
             4 => Some(Id::G),
             5 => Some(Id::RecordScale),
             6 => Some(Id::MaxStep),
+            7 => Some(Id::FrictionEps),
             10..=19 => array(Id::Alpha),
             20..=29 => array(Id::Mus),
             30..=39 => array(Id::Muk),
@@ -150,6 +155,7 @@ impl Id {
             400 => Some(Id::NBlocks),
             401 => Some(Id::Solver),
             402 => Some(Id::NEvents),
+            403 => Some(Id::NAmbiguous),
             500..=509 => array(Id::Stuck),
             600 => Some(Id::RecordFile),
             _ => None,
@@ -166,6 +172,7 @@ impl Id {
             Id::G => "g".into(),
             Id::RecordScale => "recordScale".into(),
             Id::MaxStep => "maxStep".into(),
+            Id::FrictionEps => "frictionEps".into(),
             Id::Alpha(j) => indexed("alpha", j),
             Id::Mus(j) => indexed("mus", j),
             Id::Muk(j) => indexed("muk", j),
@@ -191,6 +198,7 @@ impl Id {
             Id::NBlocks => "nBlocks".into(),
             Id::Solver => "solver".into(),
             Id::NEvents => "nEvents".into(),
+            Id::NAmbiguous => "nAmbiguous".into(),
             Id::Stuck(j) => indexed("stuck", j),
             Id::RecordFile => "recordFile".into(),
         }
@@ -199,7 +207,7 @@ impl Id {
     /// The FMI base type.
     pub fn kind(self) -> Kind {
         match self {
-            Id::NBlocks | Id::Solver | Id::NEvents => Kind::Integer,
+            Id::NBlocks | Id::Solver | Id::NEvents | Id::NAmbiguous => Kind::Integer,
             Id::Stuck(_) => Kind::Boolean,
             Id::RecordFile => Kind::String,
             _ => Kind::Real,
@@ -215,6 +223,7 @@ impl Id {
             | Id::G
             | Id::RecordScale
             | Id::MaxStep
+            | Id::FrictionEps
             | Id::Alpha(_)
             | Id::Mus(_)
             | Id::Muk(_)
@@ -348,13 +357,19 @@ pub fn table() -> Vec<Variable> {
         Id::Solver,
         None,
         Some("1".to_string()),
-        "1: event-located RK4; 2: mode switches at step ends only (baseline)",
+        "1: event-located RK4; 2: mode switches at step ends only (baseline); 3: tanh-regularized friction, plain RK4 (baseline)",
     );
     add(
         Id::MaxStep,
         Some("Time"),
         real(0.0),
-        "Largest internal step; 0: automatic",
+        "Largest internal step; 0: automatic. Solver 3 uses it as its fixed step, with no stability bound",
+    );
+    add(
+        Id::FrictionEps,
+        Some("Velocity"),
+        real(crate::solver::DEFAULT_FRICTION_EPS),
+        "Solver 3 only: friction is -muk N tanh(v / frictionEps)",
     );
     add(
         Id::Ag,
@@ -470,7 +485,13 @@ pub fn table() -> Vec<Variable> {
         Id::NEvents,
         None,
         None,
-        "Number of stick/slip mode switches",
+        "Number of stick/slip mode switches (solver 3: steps where a relative velocity changed sign)",
+    );
+    add(
+        Id::NAmbiguous,
+        None,
+        None,
+        "Mode resolutions where several stick/slip assignments were consistent (mus > muk) and the selection rule chose",
     );
     t
 }
@@ -489,7 +510,7 @@ mod tests {
         }
         assert_eq!(Id::from_vr(10), None);
         assert_eq!(Id::from_vr(19), None);
-        assert_eq!(Id::from_vr(7), None);
+        assert_eq!(Id::from_vr(8), None);
         let names: std::collections::HashSet<_> = t.iter().map(|v| v.name.as_str()).collect();
         assert_eq!(names.len(), t.len());
         assert_eq!(Id::Alpha(2).name(), "alpha[2]");

@@ -98,6 +98,7 @@ fn every_invalid_parameter_is_rejected_naming_the_variable() {
         (Id::Mus(1), -0.1, "mus[1] = -0.1"),
         (Id::Muk(3), f64::NAN, "muk[3] = NaN"),
         (Id::MaxStep, -0.01, "maxStep = -0.01"),
+        (Id::FrictionEps, 0.0, "frictionEps = 0"),
         (Id::RecordScale, f64::NAN, "recordScale = NaN"),
         (Id::Ag, f64::NAN, "ag = NaN"),
     ];
@@ -120,8 +121,8 @@ fn every_invalid_parameter_is_rejected_naming_the_variable() {
     assert!(log
         .last()
         .contains("nBlocks = 9 is not allowed: it must be an integer from 0 to 8"));
-    assert_eq!(inst.set_integer(&[Id::Solver.vr()], &[3]), Status::Error);
-    assert!(log.last().contains("solver = 3"));
+    assert_eq!(inst.set_integer(&[Id::Solver.vr()], &[4]), Status::Error);
+    assert!(log.last().contains("solver = 4 is not allowed"));
     // A cross-field rule is checked when initialization ends.
     inst.enter_initialization_mode();
     set(&mut inst, Id::Muk(1), 0.2);

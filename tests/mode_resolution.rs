@@ -217,6 +217,12 @@ fn static_above_kinetic_friction_follows_the_selection_rule() {
         if consistent.len() > 1 {
             ambiguous += 1;
         }
+        // The engine's statistic (nAmbiguous) counts the same assignments.
+        assert_eq!(
+            mode::consistent_count(&case.sys, &case.req) as usize,
+            consistent.len(),
+            "case {i}: consistent_count"
+        );
         let all = u32::MAX;
         let best_stuck = consistent
             .iter()
