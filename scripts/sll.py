@@ -14,6 +14,7 @@ import re
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -121,6 +122,7 @@ class Model:
         addLoggerProxy(byref(self.callbacks))
         self.slave.instantiate(callbacks=self.callbacks, loggingOn=False)
         self.fresh = True
+        self._durations: dict = {}
 
     def __enter__(self):
         return self
@@ -158,21 +160,20 @@ class Model:
         names = ["peakUp", "peakApAbs", "Einput", "Ekinetic", "Estrain", "Eviscous", "Efriction"]
         names += [f"peakSlip[{j}]" for j in range(1, n_blocks + 1)]
         out = dict(zip(names, self.slave.getReal([self.vr(n) for n in names])))
-        out["nEvents"] = self.slave.getInteger([self.vr("nEvents")])[0]
+        counts = ["nEvents", "nAmbiguous"]
+        out.update(zip(counts, self.slave.getInteger([self.vr(n) for n in counts])))
         return out
 
-    def run(self, record: str | Path | None = None, params: dict | None = None,
-            dt: float | None = None, stop: float | None = None) -> dict:
-        """Runs `record` (a file path; None: the FMU's embedded default) with the
-        given parameters. With `dt`, steps every `dt` and returns time histories;
-        without, covers the whole record in one fmi2DoStep (peaks only)."""
-        params = dict(params or {})
-        record_file = str(Path(record).resolve()) if record else DEFAULT_RECORD
-        if record:
-            t, _ = read_record(record, float(params.get("g", 9.81)))
-        else:
-            t, _ = read_record(Path(self.unzipdir) / "resources" / DEFAULT_RECORD)
-        stop = float(t[-1]) if stop is None else stop
+    def record_duration(self, record: str | Path | None, g: float = 9.81) -> float:
+        """Last sample time of a record (None: the embedded default), cached."""
+        key = (str(record), g)
+        if key not in self._durations:
+            path = record if record else Path(self.unzipdir) / "resources" / DEFAULT_RECORD
+            self._durations[key] = float(read_record(path, g)[0][-1])
+        return self._durations[key]
+
+    def start(self, params: dict, stop: float, record_file: str = "") -> int:
+        """Resets (unless fresh), sets the parameters, initializes; returns nBlocks."""
         if not self.fresh:
             self.slave.reset()
         self.fresh = False
@@ -184,10 +185,55 @@ class Model:
         for name, value in params.items():
             self.set(name, value)
         s.exitInitializationMode()
-        n_blocks = s.getInteger([self.vr("nBlocks")])[0]
+        return s.getInteger([self.vr("nBlocks")])[0]
+
+    def run_input(self, ag: np.ndarray, h: float, params: dict | None = None,
+                  outputs: tuple[str, ...] = ("up",)) -> dict:
+        """Co-simulation with the ground acceleration as an input: ag[i] is set
+        before the step from i h to (i + 1) h and held over it, as a master
+        does. Returns the `outputs` at every communication point and the peaks.
+        A failed step ends the run early with `failed` set."""
+        params = dict(params or {})
+        stop = len(ag) * h
+        n_blocks = self.start(params, stop)
+        s = self.slave
+        ag_vr, out_vr = [self.vr("ag")], [self.vr(n) for n in outputs]
+        rows = np.full((len(ag) + 1, len(outputs)), np.nan)
+        rows[0] = s.getReal(out_vr)
+        failed = False
+        for i, a in enumerate(ag):
+            s.setReal(ag_vr, [float(a)])
+            try:
+                s.doStep(i * h, h)
+            except Exception:
+                failed = True
+                break
+            rows[i + 1] = s.getReal(out_vr)
+        result = {"time": np.arange(len(ag) + 1) * h, "failed": failed, "nBlocks": n_blocks}
+        for k, name in enumerate(outputs):
+            result[name] = rows[:, k]
+        result["peaks"] = {} if failed else self.peaks(n_blocks)
+        if not failed:
+            s.terminate()
+        return result
+
+    def run(self, record: str | Path | None = None, params: dict | None = None,
+            dt: float | None = None, stop: float | None = None) -> dict:
+        """Runs `record` (a file path; None: the FMU's embedded default) with the
+        given parameters. With `dt`, steps every `dt` and returns time histories;
+        without, covers the whole record in one fmi2DoStep (peaks only, and
+        `seconds`, the wall time of that one call)."""
+        params = dict(params or {})
+        record_file = str(Path(record).resolve()) if record else DEFAULT_RECORD
+        if stop is None:
+            stop = self.record_duration(record, float(params.get("g", 9.81)))
+        n_blocks = self.start(params, stop, record_file)
+        s = self.slave
         result = {"params": {"recordFile": record_file, **params}, "nBlocks": n_blocks}
         if dt is None:
+            started = time.perf_counter()
             s.doStep(0.0, stop)
+            result["seconds"] = time.perf_counter() - started
         else:
             names = self.output_names(n_blocks)
             kinds = {n: self.vars[n].type for n in names}
