@@ -97,6 +97,24 @@ def read_record(path: str | Path, g: float = 9.81, dt: float | None = None,
     return data[:, 0], data[:, 1]
 
 
+_SHARED: dict = {}
+
+
+def shared_model(fmu: str | Path | None = None) -> "Model":
+    """One loaded FMU per process and FMU path, created on first use: what a
+    worker of a process pool or a Dask cluster reuses from run to run."""
+    key = str(fmu)
+    if key not in _SHARED:
+        import multiprocessing.util
+
+        m = Model(fmu)
+        # Pool workers leave through os._exit, which skips atexit: a finalizer
+        # with a priority still runs and removes the extracted FMU.
+        multiprocessing.util.Finalize(m, m.close, exitpriority=10)
+        _SHARED[key] = m
+    return _SHARED[key]
+
+
 class Model:
     """The FMU, extracted and loaded once; `run` resets it between runs."""
 
@@ -165,10 +183,12 @@ class Model:
         return out
 
     def record_duration(self, record: str | Path | None, g: float = 9.81) -> float:
-        """Last sample time of a record (None: the embedded default), cached."""
-        key = (str(record), g)
+        """Last sample time of a record (None: the embedded default), cached
+        while the file keeps its size and modification time."""
+        path = Path(record) if record else Path(self.unzipdir) / "resources" / DEFAULT_RECORD
+        stat = path.stat()
+        key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns, g)
         if key not in self._durations:
-            path = record if record else Path(self.unzipdir) / "resources" / DEFAULT_RECORD
             self._durations[key] = float(read_record(path, g)[0][-1])
         return self._durations[key]
 

@@ -127,7 +127,7 @@ pub struct Instance {
     logger: Box<dyn LogSink>,
     debug_logging: bool,
     resource_dir: Option<PathBuf>,
-    record: Option<(String, Arc<GroundMotion>)>,
+    record: Option<(RecordKey, Arc<GroundMotion>)>,
     outputs: Option<Outputs>,
     d: Dynamic,
 }
@@ -282,14 +282,15 @@ impl Instance {
             self.record = None;
             return Ok(());
         }
-        if self.record.as_ref().is_some_and(|(f, _)| *f == file) {
-            return Ok(());
-        }
         let path = Path::new(&file);
         let path = match (&self.resource_dir, path.is_absolute()) {
             (Some(dir), false) => dir.join(path),
             _ => path.to_path_buf(),
         };
+        let key = RecordKey::of(&path, self.d.values.params.g);
+        if self.record.as_ref().is_some_and(|(k, _)| *k == key) {
+            return Ok(());
+        }
         match GroundMotion::read(&path, self.d.values.params.g) {
             Ok(gm) => {
                 self.debug(&format!(
@@ -297,7 +298,7 @@ impl Instance {
                     gm.time.len(),
                     path.display()
                 ));
-                self.record = Some((file, Arc::new(gm)));
+                self.record = Some((key, Arc::new(gm)));
                 Ok(())
             }
             Err(e) => Err(self.error(func, format!("recordFile: {e}"))),
@@ -851,6 +852,29 @@ impl Instance {
 
 fn name_of(id: Id) -> String {
     id.name()
+}
+
+/// What a parsed record depends on: the file (path, size, modification time)
+/// and `g` (AT2 files are in units of g). A study reuses a parsed record across
+/// fmi2Reset; a file rewritten in between, or another g, is read again.
+#[derive(Clone, Debug, PartialEq)]
+struct RecordKey {
+    path: std::path::PathBuf,
+    stamp: Option<(u64, std::time::SystemTime)>,
+    g_bits: u64,
+}
+
+impl RecordKey {
+    fn of(path: &Path, g: f64) -> RecordKey {
+        let stamp = std::fs::metadata(path)
+            .ok()
+            .and_then(|m| Some((m.len(), m.modified().ok()?)));
+        RecordKey {
+            path: path.to_path_buf(),
+            stamp,
+            g_bits: g.to_bits(),
+        }
+    }
 }
 
 /// A sink that drops everything.

@@ -314,3 +314,34 @@ fn instances_in_several_threads_do_not_interfere() {
         assert_eq!(h.join().unwrap(), e);
     }
 }
+
+#[test]
+fn a_record_rewritten_between_runs_is_read_again() {
+    // fmi2Reset keeps a parsed record; it must not outlive a change of the file.
+    // Oracle: a held 1 m/s2 step, then a 2 m/s2 step, as fresh instances see them.
+    let dir = std::env::temp_dir().join(format!("sll_rewrite_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("step.csv");
+    let write = |a: f64, n: usize| {
+        let rows: String = (0..n).map(|i| format!("{},{a}\n", i as f64 * 0.01)).collect();
+        std::fs::write(&path, format!("time,accel\n{rows}")).unwrap();
+    };
+    let run = |inst: &mut Instance| {
+        assert_eq!(inst.setup_experiment(0.0, None), Status::Ok);
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        inst.set_string(&[Id::RecordFile.vr()], &[path.display().to_string()]);
+        assert_eq!(inst.exit_initialization_mode(), Status::Ok);
+        assert_eq!(inst.do_step(0.0, 0.5), Status::Ok);
+        real(inst, Id::PeakUp)
+    };
+    write(1.0, 101);
+    let (mut reused, _) = instance();
+    let first = run(&mut reused);
+    write(2.0, 102); // another size, and usually another modification time
+    reused.reset();
+    let second = run(&mut reused);
+    let (mut fresh, _) = instance();
+    assert_eq!(second, run(&mut fresh));
+    assert!(second > 1.5 * first, "{second} vs {first}");
+    std::fs::remove_dir_all(&dir).ok();
+}

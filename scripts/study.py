@@ -1,0 +1,375 @@
+"""The paper's parametric study (Parimi & Challagulla, section 5), in one command.
+
+    python scripts/study.py --out DIR [--zones III V] [--quick] [--workers N] [--scheduler ADDRESS]
+
+For each zone's suite of 11 spectrum-matched records (scripts/ground_motions.py
+paper; built on first use and cached under target/suites) and each structure
+period, runs the stack, the single block and the rigid attachment through the FMU
+and writes:
+- DIR/runs.csv: one row per simulation (zone, record, Tp, alpha1, alpha2, mu1, mu2,
+  configuration, peakUp, peakSlip1, peakSlip2, nEvents);
+- DIR/drr.csv: one row per grid point, means over the records:
+  zone, Tp, alpha1, alpha2, mu1, mu2, DRR1, DRR2, u_stack, u_single, u_rigid, records;
+- DIR/fig5.png, DIR/fig6_zoneIII.png, DIR/fig7_zoneV.png: DRR against Tp as in the
+  paper's Figs. 5-7; DIR/conclusions.md: the paper's six conclusions checked against
+  this run; DIR/timing.json.
+
+Default grid: Tp 0.1-3.0 s by 0.1 s; alpha1, alpha2 in {0.1, 0.25, 0.5}; mu1 in
+{0.1, 0.2, 0.3}; mu2 in {0.05, 0.1, 0.2, 0.3}; zeta 0.05; mus = muk (the paper's).
+The single and rigid configurations are computed once per (zone, record, Tp,
+alpha1 + alpha2, mu1) and (zone, record, Tp, alpha1 + alpha2) and reused.
+`--quick`: two records per zone, Tp 0.5 and 2.0 s, alpha 0.25, mu1 0.1 and 0.3,
+mu2 0.05 and 0.3 (for tests).
+
+Runs go to a local process pool (--workers, default: every core), or with
+--scheduler to a Dask distributed cluster (its workers must see this repository,
+the FMU and the suites at the same paths, as on one machine or a shared file
+system). Either way each worker loads the FMU once; results are identical.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+import time
+from collections import defaultdict
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+import numpy as np
+
+SCRIPTS = Path(__file__).resolve().parent
+sys.path.insert(0, str(SCRIPTS))
+import ground_motions  # noqa: E402
+import sll  # noqa: E402
+import study_tasks  # noqa: E402
+
+ROOT = SCRIPTS.parent
+GRID = {
+    "Tp": [round(0.1 * i, 10) for i in range(1, 31)],
+    "alpha": [0.1, 0.25, 0.5],
+    "mu1": [0.1, 0.2, 0.3],
+    "mu2": [0.05, 0.1, 0.2, 0.3],
+}
+QUICK = {"Tp": [0.5, 2.0], "alpha": [0.25], "mu1": [0.1, 0.3], "mu2": [0.05, 0.3]}
+RUN_COLUMNS = ["zone", "record", "Tp", "alpha1", "alpha2", "mu1", "mu2", "configuration",
+               "peakUp", "peakSlip1", "peakSlip2", "nEvents"]
+DRR_COLUMNS = ["zone", "Tp", "alpha1", "alpha2", "mu1", "mu2", "DRR1", "DRR2",
+               "u_stack", "u_single", "u_rigid", "records"]
+RIGID_LIKE = 0.95  # "behaves as rigidly attached": DRR >= 0.95
+
+
+def suite(zone: str, quick: bool) -> list[Path]:
+    """The zone's matched records (built and cached on first use)."""
+    entries = ground_motions.PAPER_SUITE[:2] if quick else ground_motions.PAPER_SUITE
+    out = ROOT / "target" / ("suites_quick" if quick else "suites") / f"zone{zone}"
+    files = [out / (Path(f).stem + ".csv") for _, f, _ in entries]
+    if not all(f.exists() for f in files):
+        print(f"matching the Zone {zone} suite to IS 1893 (once; cached in {out}) ...", flush=True)
+        labels = {f: note for _, f, note in entries}
+        ground_motions.build_suite([ground_motions.RECORDS / f for _, f, _ in entries],
+                                   zone, "I", "DBE", out, labels)
+    return files
+
+
+def tasks_for(zones, grid: dict, quick: bool, fmu: str) -> list[dict]:
+    return [{"zone": z, "record": str(r), "Tp": tp, "alpha": grid["alpha"], "mu1": grid["mu1"],
+             "mu2": grid["mu2"], "fmu": fmu, "scripts": str(SCRIPTS)}
+            for z in zones for r in suite(z, quick) for tp in grid["Tp"]]
+
+
+def runs_per_task(grid: dict) -> int:
+    totals = len({round(a1 + a2, 12) for a1 in grid["alpha"] for a2 in grid["alpha"]})
+    return totals * (1 + len(grid["mu1"])) + len(grid["alpha"]) ** 2 * len(grid["mu1"]) * len(grid["mu2"])
+
+
+class Progress:
+    def __init__(self, total_runs: int):
+        self.total, self.done, self.start, self.last = total_runs, 0, time.perf_counter(), 0.0
+
+    def add(self, n: int):
+        self.done += n
+        now = time.perf_counter()
+        if now - self.last > 2.0 or self.done == self.total:
+            self.last = now
+            rate = self.done / max(now - self.start, 1e-9)
+            eta = (self.total - self.done) / rate if rate > 0 else float("inf")
+            bar = "#" * int(30 * self.done / self.total)
+            print(f"\r[{bar:30s}] {self.done}/{self.total} simulations, {rate:.0f}/s, "
+                  f"{now - self.start:.0f} s, ETA {eta:.0f} s", end="\n" if self.done == self.total else "",
+                  flush=True)
+
+
+def run_local(tasks: list[dict], workers: int, progress: Progress) -> list[list[dict]]:
+    results: list = [None] * len(tasks)
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = {pool.submit(study_tasks.run_task, t): i for i, t in enumerate(tasks)}
+        for f in as_completed(futures):
+            results[futures[f]] = f.result()
+            progress.add(len(results[futures[f]]))
+    return results
+
+
+def run_dask(tasks: list[dict], address: str, progress: Progress) -> list[list[dict]]:
+    import cloudpickle
+    from distributed import Client, as_completed as dask_completed
+
+    # The task code travels by value; it finds sll.py through task["scripts"].
+    cloudpickle.register_pickle_by_value(study_tasks)
+    with Client(address) as client:
+        futures = client.map(study_tasks.run_task, tasks, pure=False)
+        index = {f.key: i for i, f in enumerate(futures)}
+        results: list = [None] * len(tasks)
+        for f in dask_completed(futures):
+            results[index[f.key]] = f.result()
+            progress.add(len(results[index[f.key]]))
+    return results
+
+
+def fmt(v) -> str:
+    return repr(v) if isinstance(v, float) else str(v)
+
+
+def write_csv(path: Path, columns: list[str], rows: list[dict]):
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(columns)
+        for r in rows:
+            w.writerow([fmt(r.get(c, "")) for c in columns])
+
+
+def drr_table(runs: list[dict]) -> list[dict]:
+    """Means over the records for every grid point of the stacks."""
+    rigid, single, stack = defaultdict(list), defaultdict(list), defaultdict(list)
+    for r in runs:
+        if r["configuration"] == "rigid":
+            rigid[(r["zone"], r["Tp"], r["alpha1"])].append(r["peakUp"])
+        elif r["configuration"] == "single":
+            single[(r["zone"], r["Tp"], r["alpha1"], r["mu1"])].append(r["peakUp"])
+        else:
+            stack[(r["zone"], r["Tp"], r["alpha1"], r["alpha2"], r["mu1"], r["mu2"])].append(r["peakUp"])
+    rows = []
+    for (zone, tp, a1, a2, mu1, mu2), peaks in sorted(stack.items()):
+        a = round(a1 + a2, 12)
+        u_stack = float(np.mean(peaks))
+        u_single = float(np.mean(single[(zone, tp, a, mu1)]))
+        u_rigid = float(np.mean(rigid[(zone, tp, a)]))
+        rows.append({"zone": zone, "Tp": tp, "alpha1": a1, "alpha2": a2, "mu1": mu1, "mu2": mu2,
+                     "DRR1": u_stack / u_rigid, "DRR2": u_single / u_rigid, "u_stack": u_stack,
+                     "u_single": u_single, "u_rigid": u_rigid, "records": len(peaks)})
+    return rows
+
+
+def conclusions(drr: list[dict], runs: list[dict]) -> list[tuple[str, str, str]]:
+    """The paper's six conclusions (section 6), each with a verdict and the numbers."""
+    out = []
+    rel = [abs(r["DRR1"] - r["DRR2"]) / r["DRR2"] for r in drr]
+    differ = sum(x > 0.01 for x in rel)
+    out.append(("1. The response with a two-level stack differs from that with a single sliding block.",
+                "holds with a qualification" if differ else "does not hold",
+                f"DRR1 and DRR2 differ by more than 1 % at {differ} of {len(drr)} grid points (up to "
+                f"{100 * max(rel):.0f} %); they are equal wherever mu2 >= mu1 (conclusion 4)."))
+    low = [r for r in drr if r["DRR2"] < r["DRR1"] * (1 - 1e-9)]
+    worst = max(((r["DRR1"] - r["DRR2"]) / r["DRR1"] for r in low), default=0.0)
+    where = ""
+    if low:
+        zones = sorted({r["zone"] for r in low})
+        where = (f", in Zone {' and '.join(zones)} at Tp {min(r['Tp'] for r in low):g}-"
+                 f"{max(r['Tp'] for r in low):g} s"
+                 + (", all with mu2 < mu1" if all(r["mu2"] < r["mu1"] for r in low) else ""))
+    out.append(("2. Ignoring the dissipation between the blocks (single block) is conservative: DRR2 >= DRR1.",
+                "holds" if not low else ("holds with a qualification" if worst < 0.05 else "does not hold"),
+                f"DRR2 < DRR1 at {len(low)} of {len(drr)} grid points (by up to {100 * worst:.1f} %{where}); "
+                f"elsewhere DRR2 >= DRR1."))
+    # 3: trends with Tp, mass ratio and friction (of the DRR, as the paper plots).
+    by = defaultdict(dict)
+    for r in drr:
+        by[(r["zone"], r["alpha1"], r["alpha2"], r["mu1"], r["mu2"])][r["Tp"]] = r["DRR1"]
+    tps = sorted({r["Tp"] for r in drr})
+    rising_tp = sum(c[tps[-1]] > c[tps[0]] for c in by.values())
+    idx = {(r["zone"], r["Tp"], r["alpha1"], r["alpha2"], r["mu1"], r["mu2"]): r["DRR1"] for r in drr}
+    mu1s = sorted({r["mu1"] for r in drr})
+    pairs_mu = [(idx[k], idx[k[:4] + (mu1s[i + 1],) + k[5:]]) for k in idx for i in range(len(mu1s) - 1)
+                if k[4] == mu1s[i] and k[:4] + (mu1s[i + 1],) + k[5:] in idx]
+    up_mu = sum(b >= a - 1e-12 for a, b in pairs_mu)
+    alphas = sorted({r["alpha1"] for r in drr})
+    pairs_a = [(k[1], idx[k], idx[(k[0], k[1], alphas[i + 1], alphas[i + 1]) + k[4:]]) for k in idx
+               for i in range(len(alphas) - 1)
+               if k[2] == k[3] == alphas[i] and (k[0], k[1], alphas[i + 1], alphas[i + 1]) + k[4:] in idx]
+    short = [(a, b) for tp, a, b in pairs_a if tp < 1.0]
+    down_a = sum(b < a for a, b in short)
+    out.append(("3. The response increases significantly with the period, the mass ratios and the friction.",
+                "holds with a qualification",
+                f"DRR1 is higher at Tp = {tps[-1]:g} s than at {tps[0]:g} s on {rising_tp} of {len(by)} curves; "
+                f"it does not fall when mu1 rises in {up_mu} of {len(pairs_mu)} comparisons; but for Tp < 1 s it "
+                f"falls as alpha1 = alpha2 rises in {down_a} of {len(short)} comparisons (as the paper's own "
+                f"section 5 says)."))
+    upper = [r for r in runs if r["configuration"] == "stack" and r["mu2"] > r["mu1"]]
+    slipped = sum(r["peakSlip2"] > 0.0 for r in upper)
+    eq = [x for r, x in zip(drr, rel) if r["mu2"] > r["mu1"]]
+    eq_equal = [x for r, x in zip(drr, rel) if r["mu2"] == r["mu1"]]
+    out.append(("4. If mu2 > mu1 the blocks do not slide on each other (no dissipation between them).",
+                "holds" if slipped == 0 else "does not hold",
+                f"upper block slip is exactly 0 in all {len(upper)} runs with mu2 > mu1 "
+                f"(largest abs(DRR1 - DRR2) / DRR2 {max(eq, default=0):.1e}); it follows from Coulomb's law "
+                f"(the lower block's sliding acceleration is mu1 g < mu2 g)."
+                + (f" The same holds at mu2 = mu1 ({max(eq_equal):.1e}), which the paper counts as dissipating."
+                   if eq_equal else "")
+                if slipped == 0 else f"{slipped} of {len(upper)} runs with mu2 > mu1 have upper slip."))
+    z3 = [r for r in drr if r["zone"] == "III" and r["Tp"] >= 2.0 - 1e-9]
+    if z3:
+        rest = [r["DRR1"] for r in z3 if r["mu2"] != 0.05]
+        low_mu = [r["DRR1"] for r in z3 if r["mu2"] == 0.05]
+        ok = min(rest, default=1.0) >= RIGID_LIKE
+        exception_seen = bool(low_mu) and min(low_mu) < RIGID_LIKE
+        z5 = [r["DRR1"] for r in drr if r["zone"] == "V" and r["Tp"] >= 2.0 - 1e-9 and r["mu2"] == 0.05]
+        out.append(("5. Zone III, Tp >= 2 s: the live load acts as rigidly attached, except for mu2 = 0.05.",
+                    "holds" if ok and exception_seen else ("holds with a qualification" if ok else "does not hold"),
+                    f"min DRR1 for Tp >= 2 s: {min(rest, default=float('nan')):.6f} with mu2 >= 0.1, "
+                    f"{min(low_mu, default=float('nan')):.6f} with mu2 = 0.05 (rigid-like: DRR >= {RIGID_LIKE})"
+                    + ("" if exception_seen else "; the mu2 = 0.05 exception does not appear in Zone III")
+                    + (f"; in Zone V mu2 = 0.05 gives DRR1 down to {min(z5):.3f}" if z5 else "") + "."))
+    else:
+        out.append(("5. Zone III, Tp >= 2 s: rigidly attached, except mu2 = 0.05.", "not run", "Zone III not in this run."))
+    parts = []
+    verdicts = []
+    for zone, mu1_min, mu2_min in (("III", 0.1, 0.1), ("V", 0.3, 0.2)):
+        sel = [r["DRR1"] for r in drr if r["zone"] == zone and r["Tp"] >= 1.25
+               and r["mu1"] >= mu1_min and r["mu2"] >= mu2_min]
+        if sel:
+            verdicts.append(min(sel) >= RIGID_LIKE)
+            parts.append(f"Zone {zone} (mu1 >= {mu1_min}, mu2 >= {mu2_min}): min DRR1 {min(sel):.3f} over {len(sel)} points")
+    out.append(("6. Tp >= 1.25 s: count the whole live load as mass for mu1, mu2 >= 0.1 (Zone III) and "
+                "mu1 >= 0.3, mu2 >= 0.2 (Zone V).",
+                "not run" if not verdicts else ("holds" if all(verdicts) else "does not hold"),
+                "; ".join(parts) + f" (rigid-like: DRR >= {RIGID_LIKE})."))
+    return out
+
+
+def plot_figures(drr: list[dict], out: Path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    zones = sorted({r["zone"] for r in drr}, key=lambda z: len(z), reverse=True)
+    alphas = sorted({r["alpha1"] for r in drr})
+    mu1s, mu2s = sorted({r["mu1"] for r in drr}), sorted({r["mu2"] for r in drr})
+
+    def curve(zone, a1, a2, mu1, mu2, key):
+        pts = sorted((r["Tp"], r[key]) for r in drr if (r["zone"], r["alpha1"], r["alpha2"], r["mu1"], r["mu2"])
+                     == (zone, a1, a2, mu1, mu2))
+        return [p[0] for p in pts], [p[1] for p in pts]
+
+    # Fig. 5: alpha1 = alpha2 = 0.25 (or nearest), mu2 smallest, mu1 smallest and largest.
+    a = min(alphas, key=lambda x: abs(x - 0.25))
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), squeeze=False)
+    for ax, mu1 in zip(axes[0], [mu1s[0], mu1s[-1]]):
+        for i, zone in enumerate(zones):
+            for key, ls in (("DRR1", "-"), ("DRR2", "--")):
+                ax.plot(*curve(zone, a, a, mu1, mu2s[0], key), ls, color=f"C{i}", marker="o", ms=3,
+                        label=f"{key}, Zone {zone}")
+        ax.set_title(f"alpha1 = alpha2 = {a:g}, mu2 = {mu2s[0]:g}, mu1 = {mu1:g}")
+        ax.set_xlabel("Tp (s)")
+        ax.set_ylabel("DRR")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "fig5.png", dpi=110)
+    plt.close(fig)
+    # Figs. 6 and 7: one zone each; rows mu2, columns mu1, lines per alpha1 = alpha2.
+    for zone, name in (("III", "fig6_zoneIII.png"), ("V", "fig7_zoneV.png")):
+        if zone not in zones:
+            continue
+        fig, axes = plt.subplots(len(mu2s), len(mu1s), figsize=(3.8 * len(mu1s), 2.8 * len(mu2s)),
+                                 squeeze=False, sharex=True, sharey=True)
+        for i, mu2 in enumerate(mu2s):
+            for j, mu1 in enumerate(mu1s):
+                ax = axes[i, j]
+                for k, al in enumerate(alphas):
+                    ax.plot(*curve(zone, al, al, mu1, mu2, "DRR1"), "-", color=f"C{k}", label=f"DRR1, alpha {al:g}+{al:g}")
+                    ax.plot(*curve(zone, al, al, mu1, mu2, "DRR2"), "--", color=f"C{k}", label=f"DRR2, alpha {al + al:g}")
+                ax.set_title(f"mu1 = {mu1:g}, mu2 = {mu2:g}", fontsize=9)
+                ax.grid(alpha=0.3)
+                if i == len(mu2s) - 1:
+                    ax.set_xlabel("Tp (s)")
+                if j == 0:
+                    ax.set_ylabel("DRR")
+        axes[0, 0].legend(fontsize=6)
+        fig.suptitle(f"Displacement response ratios, Zone {zone} suite (mean of {drr[0]['records']} records)")
+        fig.tight_layout()
+        fig.savefig(out / name, dpi=100)
+        plt.close(fig)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", required=True, type=Path)
+    ap.add_argument("--zones", nargs="+", default=["III", "V"], choices=["III", "V"])
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--scheduler", help="address of a Dask distributed scheduler, e.g. tcp://host:8786")
+    ap.add_argument("--replot", action="store_true",
+                    help="no simulations: rebuild drr.csv, figures and conclusions from DIR/runs.csv")
+    args = ap.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    if args.replot:
+        report(read_runs(args.out / "runs.csv"), args.out)
+        return 0
+    grid = QUICK if args.quick else GRID
+    fmu = str(sll.fmu_path())
+    tasks = tasks_for(args.zones, grid, args.quick, fmu)
+    total = len(tasks) * runs_per_task(grid)
+    where = f"Dask scheduler {args.scheduler}" if args.scheduler else f"{args.workers} local worker processes"
+    print(f"{total} simulations in {len(tasks)} tasks on {where}", flush=True)
+    progress = Progress(total)
+    started = time.perf_counter()
+    if args.scheduler:
+        results = run_dask(tasks, args.scheduler, progress)
+    else:
+        results = run_local(tasks, args.workers, progress)
+    seconds = time.perf_counter() - started
+    runs = [row for rows in results for row in rows]
+    write_csv(args.out / "runs.csv", RUN_COLUMNS, runs)
+    timing = {"simulations": len(runs), "seconds": round(seconds, 2),
+              "simulations_per_second": round(len(runs) / seconds, 1), "where": where,
+              "cores": os.cpu_count()}
+    (args.out / "timing.json").write_text(json.dumps(timing, indent=1) + "\n")
+    print(f"{len(runs)} simulations in {seconds:.1f} s ({len(runs) / seconds:.0f}/s)", flush=True)
+    report(runs, args.out)
+    return 0
+
+
+def read_runs(path: Path) -> list[dict]:
+    """runs.csv back with the types run_task gives (blank frictions stay "")."""
+    rows = []
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            for k in ("Tp", "alpha1", "alpha2", "mu1", "mu2", "peakUp", "peakSlip1", "peakSlip2"):
+                if r[k] != "":
+                    r[k] = float(r[k])
+            r["nEvents"] = int(r["nEvents"])
+            rows.append(r)
+    return rows
+
+
+def report(runs: list[dict], out: Path):
+    """drr.csv, the figures and conclusions.md from the runs."""
+    drr = drr_table(runs)
+    write_csv(out / "drr.csv", DRR_COLUMNS, drr)
+    plot_figures(drr, out)
+    table = conclusions(drr, runs)
+    lines = ["| paper's conclusion | verdict | numbers from this run |", "| --- | --- | --- |"]
+    lines += [f"| {c} | {v} | {n} |" for c, v, n in table]
+    (out / "conclusions.md").write_text("\n".join(lines) + "\n")
+    print(f"wrote {out}/runs.csv, drr.csv, fig5.png, fig6_zoneIII.png, fig7_zoneV.png, conclusions.md")
+    for c, v, n in table:
+        print(f"- {c}\n  {v}: {n}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
