@@ -13,6 +13,8 @@ use crate::params::{Method, ParamError, Params, Settings, MAX_BLOCKS, MAX_BODIES
 use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::system::System;
 
+mod lean;
+
 /// Excitation over one interval, linear in time from the interval start:
 /// `ag(t) = ag + ag_rate (t - t_start)`, and likewise the external force.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -205,6 +207,94 @@ impl Outputs {
 /// input and viscous work done on it since the step start.
 type Structure = [f64; 4];
 
+/// RK4 of the structure's cluster in one mode under one excitation piece:
+/// (u0, v0) plus the input and viscous work, as one short vector.
+#[derive(Clone, Copy, Debug)]
+struct StructureRk4 {
+    k: f64,
+    c: f64,
+    mass0: f64,
+    inv_mass0: f64,
+    slip_load0: f64,
+    exc: Excitation,
+    t_ref: f64,
+}
+
+impl StructureRk4 {
+    fn new(sys: &System, d: &Dynamics, exc: &Excitation, t_ref: f64) -> StructureRk4 {
+        StructureRk4 {
+            k: sys.k,
+            c: sys.c,
+            mass0: d.mass[0],
+            inv_mass0: d.inv_mass0,
+            slip_load0: d.slip_load[0],
+            exc: *exc,
+            t_ref,
+        }
+    }
+
+    /// (ag, fext) at `t`.
+    #[inline]
+    fn inputs(&self, t: f64) -> (f64, f64) {
+        let dt = t - self.t_ref;
+        (
+            self.exc.ag + self.exc.ag_rate * dt,
+            self.exc.fext + self.exc.fext_rate * dt,
+        )
+    }
+
+    /// Absolute acceleration of the structure's cluster at a state.
+    #[inline]
+    fn accel(&self, fext: f64, u0: f64, v0: f64) -> f64 {
+        (self.slip_load0 + fext - self.k * u0 - self.c * v0) * self.inv_mass0
+    }
+
+    /// Absolute acceleration of the structure and its time derivative at `t`.
+    #[inline]
+    fn accel_and_jerk(&self, t: f64, u0: f64, v0: f64) -> (f64, f64) {
+        let (ag, fext) = self.inputs(t);
+        let a = self.accel(fext, u0, v0);
+        let jerk = (self.exc.fext_rate - self.k * v0 - self.c * (a - ag)) * self.inv_mass0;
+        (a, jerk)
+    }
+
+    /// Rates of (u0, v0, input work, viscous work).
+    #[inline]
+    fn rates(&self, t: f64, u0: f64, v0: f64) -> Structure {
+        let (ag, fext) = self.inputs(t);
+        let a = self.accel(fext, u0, v0) - ag;
+        [v0, a, (fext - ag * self.mass0) * v0, self.c * v0 * v0]
+    }
+
+    /// One RK4 step of length `tau` from (u, v) at `t0`; the work terms are
+    /// the increments over the step.
+    #[inline]
+    fn step(&self, t0: f64, u: f64, v: f64, tau: f64) -> Structure {
+        let k1 = self.rates(t0, u, v);
+        let k2 = self.rates(t0 + 0.5 * tau, u + 0.5 * tau * k1[0], v + 0.5 * tau * k1[1]);
+        let k3 = self.rates(t0 + 0.5 * tau, u + 0.5 * tau * k2[0], v + 0.5 * tau * k2[1]);
+        let k4 = self.rates(t0 + tau, u + tau * k3[0], v + tau * k3[1]);
+        let w = tau / 6.0;
+        let sum = |i: usize| w * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+        [u + sum(0), v + sum(1), sum(2), sum(3)]
+    }
+}
+
+/// A cluster above the structure's over a step of length `h`: its absolute
+/// acceleration is constant in the mode, so RK4 gives it exactly its Taylor
+/// polynomial, and Simpson's rule, exact for it, its input work. Returns
+/// (displacement increment, end velocity, input work) from velocity `v`.
+#[inline]
+fn upper_cluster_step(v: f64, accel: f64, mass: f64, ag0: f64, ag_rate: f64, h: f64) -> [f64; 3] {
+    let rel = accel - ag0;
+    let vm = v + 0.5 * h * rel - 0.125 * h * h * ag_rate;
+    let v_end = v + h * rel - 0.5 * h * h * ag_rate;
+    let du = h * (v + h * (0.5 * rel - h * ag_rate / 6.0));
+    let (agm, ag1) = (ag0 + 0.5 * h * ag_rate, ag0 + h * ag_rate);
+    let work = -mass * h / 6.0 * (ag0 * v + 4.0 * agm * vm + ag1 * v_end);
+    [du, v_end, work]
+}
+
 /// One step's frozen ingredients: the mode, the excitation, and every
 /// body's state at the step start `t0`.
 ///
@@ -218,7 +308,7 @@ struct Segment<'a> {
     mode: &'a Mode,
     dynamics: &'a Dynamics,
     exc: Excitation,
-    t_ref: f64,
+    rk: StructureRk4,
     t0: f64,
     ag0: f64,
     u: &'a [f64; MAX_BODIES],
@@ -226,38 +316,13 @@ struct Segment<'a> {
 }
 
 impl Segment<'_> {
-    #[inline]
-    fn inputs(&self, t: f64) -> (f64, f64) {
-        let dt = t - self.t_ref;
-        (
-            self.exc.ag + self.exc.ag_rate * dt,
-            self.exc.fext + self.exc.fext_rate * dt,
-        )
-    }
-
     fn start(&self) -> Structure {
         [self.u[0], self.v[0], 0.0, 0.0]
     }
 
-    /// Rates of (u0, v0, input work, viscous work) of the structure's cluster.
-    #[inline]
-    fn structure_rates(&self, t: f64, u0: f64, v0: f64) -> Structure {
-        let (ag, fext) = self.inputs(t);
-        let d = self.dynamics;
-        let a = d.accel0(Dynamics::structure_load(self.sys, u0, v0, fext)) - ag;
-        [v0, a, (fext - ag * d.mass[0]) * v0, self.sys.c * v0 * v0]
-    }
-
     /// The structure's cluster after one RK4 step of length `tau` from `t0`.
     fn structure_after(&self, tau: f64) -> Structure {
-        let (u, v, t0) = (self.u[0], self.v[0], self.t0);
-        let k1 = self.structure_rates(t0, u, v);
-        let k2 = self.structure_rates(t0 + 0.5 * tau, u + 0.5 * tau * k1[0], v + 0.5 * tau * k1[1]);
-        let k3 = self.structure_rates(t0 + 0.5 * tau, u + 0.5 * tau * k2[0], v + 0.5 * tau * k2[1]);
-        let k4 = self.structure_rates(t0 + tau, u + tau * k3[0], v + tau * k3[1]);
-        let w = tau / 6.0;
-        let sum = |i: usize| w * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
-        [u + sum(0), v + sum(1), sum(2), sum(3)]
+        self.rk.step(self.t0, self.u[0], self.v[0], tau)
     }
 
     /// Velocity of cluster `c` at `t0 + tau`; `x` is the structure's cluster then.
@@ -282,7 +347,7 @@ impl Segment<'_> {
                 // equal friction coefficients the stick force of a block riding
                 // on a sliding one is exactly mus N; without the slack rounding
                 // alone would make it chatter.
-                let (_, fext) = self.inputs(self.t0 + tau);
+                let (_, fext) = self.rk.inputs(self.t0 + tau);
                 let load0 = Dynamics::structure_load(self.sys, x[0], x[1], fext);
                 let f = d.force(j, self.mode, load0);
                 self.sys.mus[j] * self.sys.normal[j] * (1.0 + mode::CONSISTENCY_TOL) - f.abs()
@@ -496,11 +561,24 @@ impl Simulator {
             let n = substeps(length, self.h_max);
             let h = length / n;
             let n = n as usize;
-            for i in 1..=n {
-                let t1 = if i == n { t_end } else { t_ref + i as f64 * h };
-                match self.settings.method {
-                    Method::EventLocated => self.step_located(t1, exc, t_ref),
-                    Method::StepEnd => self.step_switch_at_end(t1, exc, t_ref),
+            let end_of = |i: usize| if i == n { t_end } else { t_ref + i as f64 * h };
+            match self.settings.method {
+                Method::EventLocated => {
+                    // Runs of switch-free steps on the fast path; the step
+                    // where a guard fires with event location.
+                    let mut i = 1;
+                    while i <= n {
+                        i = self.lean_steps(i, n, h, t_end, exc, t_ref);
+                        if i <= n {
+                            self.step_located(end_of(i), exc, t_ref);
+                            i += 1;
+                        }
+                    }
+                }
+                Method::StepEnd => {
+                    for i in 1..=n {
+                        self.step_switch_at_end(end_of(i), exc, t_ref);
+                    }
                 }
             }
         }
@@ -518,7 +596,7 @@ impl Simulator {
             mode: &self.mode,
             dynamics: &self.dynamics,
             exc: *exc,
-            t_ref,
+            rk: StructureRk4::new(&self.sys, &self.dynamics, exc, t_ref),
             t0: self.t,
             ag0: exc.ag + exc.ag_rate * (self.t - t_ref),
             u: &self.u,
@@ -537,21 +615,17 @@ impl Simulator {
         // Clusters above the structure's: exact polynomials in time (what RK4
         // gives them), and Simpson's rule, exact, for their input work.
         let mut upper_work = 0.0;
-        let nc = self.dynamics.n_clusters;
-        if nc > 1 {
-            let d = &self.dynamics;
-            let ag0 = exc.ag + exc.ag_rate * (self.t - t_ref);
-            let (agm, ag1) = (ag0 + 0.5 * h * exc.ag_rate, ag0 + h * exc.ag_rate);
-            for c in 1..nc {
-                let v = self.v[d.bottom[c]];
-                let rel = d.accel_const[c] - ag0;
-                let vm = v + 0.5 * h * rel - 0.125 * h * h * exc.ag_rate;
-                v_end[c] = v + h * rel - 0.5 * h * h * exc.ag_rate;
-                du[c] = h * (v + h * (0.5 * rel - h * exc.ag_rate / 6.0));
-                upper_work -= d.mass[c] * h / 6.0 * (ag0 * v + 4.0 * agm * vm + ag1 * v_end[c]);
-            }
+        let d = &self.dynamics;
+        let ag0 = exc.ag + exc.ag_rate * (self.t - t_ref);
+        for c in 1..d.n_clusters {
+            let v = self.v[d.bottom[c]];
+            let [dc, vc, work] =
+                upper_cluster_step(v, d.accel_const[c], d.mass[c], ag0, exc.ag_rate, h);
+            (du[c], v_end[c]) = (dc, vc);
+            upper_work += work;
         }
-        let (a0_start, jerk_start) = self.structure_accel_and_jerk(exc, t_ref, self.t);
+        let rk = StructureRk4::new(&self.sys, d, exc, t_ref);
+        let (a0_start, jerk_start) = rk.accel_and_jerk(self.t, self.u[0], self.v[0]);
         let (u0_start, v0_start) = (self.u[0], self.v[0]);
         let d = &self.dynamics;
         for j in 1..=n {
@@ -583,7 +657,7 @@ impl Simulator {
         self.t += h;
         self.stats.steps += 1;
 
-        let (a0_end, jerk_end) = self.structure_accel_and_jerk(exc, t_ref, self.t);
+        let (a0_end, jerk_end) = rk.accel_and_jerk(self.t, self.u[0], self.v[0]);
         let peak = hermite::max_abs_above(u0_start, v0_start, x1[0], x1[1], h, self.peak_u0);
         self.peak_u0 = self.peak_u0.max(peak);
         let peak = hermite::max_abs_above(a0_start, jerk_start, a0_end, jerk_end, h, self.peak_a0);
@@ -596,18 +670,6 @@ impl Simulator {
 
     fn structure_accel(&self) -> f64 {
         self.dynamics.accel(0, self.load0())
-    }
-
-    /// Absolute acceleration of the structure and its time derivative at `t`.
-    fn structure_accel_and_jerk(&self, exc: &Excitation, t_ref: f64, t: f64) -> (f64, f64) {
-        let ag = exc.ag + exc.ag_rate * (t - t_ref);
-        let fext = exc.fext + exc.fext_rate * (t - t_ref);
-        let load0 = Dynamics::structure_load(&self.sys, self.u[0], self.v[0], fext);
-        let a = self.dynamics.accel(0, load0);
-        let rel_acc = a - ag;
-        let jerk =
-            (exc.fext_rate - self.sys.k * self.v[0] - self.sys.c * rel_acc) / self.dynamics.mass[0];
-        (a, jerk)
     }
 
     /// Interfaces whose relative velocity is exactly zero (free ones excluded).

@@ -175,18 +175,29 @@ impl Dynamics {
 
     /// Friction force of interface j (force of body j-1 on body j).
     pub fn force(&self, j: usize, mode: &Mode, load0: f64) -> f64 {
+        let (mass_above, f_top) = self.force_affine(j, mode);
         if mode.is_stuck(j) {
-            // Bodies j..=top move with the cluster: F_j = M_above A + F_{top+1}.
-            let c = self.cluster_of[j];
-            let above = self.top[c] + 1;
+            mass_above * self.accel(self.cluster_of[j], load0) + f_top
+        } else {
+            f_top
+        }
+    }
+
+    /// The force of interface j as `a A + b`, A the absolute acceleration of
+    /// its upper body's cluster: for a stuck interface the bodies j..=top move
+    /// with the cluster, so F_j = M_above A + F_{top+1}; a slipping or free
+    /// one carries its constant friction force (a = 0).
+    pub fn force_affine(&self, j: usize, mode: &Mode) -> (f64, f64) {
+        if mode.is_stuck(j) {
+            let above = self.top[self.cluster_of[j]] + 1;
             let f_top = if above <= mode.n {
                 self.slip_force[above]
             } else {
                 0.0
             };
-            self.mass_above[j] * self.accel(c, load0) + f_top
+            (self.mass_above[j], f_top)
         } else {
-            self.slip_force[j]
+            (0.0, self.slip_force[j])
         }
     }
 
