@@ -22,9 +22,10 @@ fn main() {
     }
     let el = t.elapsed().as_secs_f64() / reps as f64;
     println!(
-        "N={n}: {:.3} ms per sim, {} steps, {:.1} ns/step",
+        "N={n}: {:.3} ms per sim, {} steps, {} events, {:.1} ns/step",
         el * 1e3,
         st.steps,
+        st.events,
         el * 1e9 / st.steps as f64
     );
 }

@@ -584,7 +584,12 @@ impl Simulator {
         }
         self.ag_now = exc.ag + exc.ag_rate * length;
         self.fext_now = exc.fext + exc.fext_rate * length;
-        if !(self.u.iter().chain(self.v.iter()).all(|x| x.is_finite())) {
+        let n = self.sys.n;
+        if !(self.u[..=n]
+            .iter()
+            .chain(&self.v[..=n])
+            .all(|x| x.is_finite()))
+        {
             return Err(SimError::NonFinite { t: self.t });
         }
         Ok(())

@@ -4,10 +4,10 @@
 //! only checks pointers, converts arguments and calls in here.
 
 use crate::engine::{Excitation, Outputs};
-use crate::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
 use crate::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
 use crate::record::{self, GroundMotion};
 use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
+use crate::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
 use crate::variables::{Causality, Id};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

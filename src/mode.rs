@@ -65,6 +65,42 @@ impl Mode {
     }
 }
 
+/// A guard of a mode in the form the fast path evaluates it at a step end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Guard {
+    /// A stuck interface in the structure's cluster: positive while its force
+    /// `mass_above A0 + f_top` (A0 the cluster's absolute acceleration) stays
+    /// within `cap = mus N (1 + CONSISTENCY_TOL)`.
+    Stuck {
+        /// Mass of the bodies it carries.
+        mass_above: f64,
+        /// Friction force on the top of its cluster.
+        f_top: f64,
+        /// Static capacity with the consistency slack.
+        cap: f64,
+    },
+    /// A slipping interface: `sign (v[hi] - v[lo])` of its two clusters.
+    Slip {
+        /// Cluster above the interface.
+        hi: usize,
+        /// Cluster below it.
+        lo: usize,
+        /// Direction of slip.
+        sign: f64,
+    },
+}
+
+/// An interface between two clusters (its slip changes in the mode).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Moving {
+    /// The interface.
+    pub j: usize,
+    /// Cluster above it.
+    pub hi: usize,
+    /// Cluster below it.
+    pub lo: usize,
+}
+
 /// The reduced dynamics of one mode: clusters, their masses and the
 /// constant forces the slipping interfaces put on them.
 #[derive(Clone, Debug)]
@@ -94,6 +130,14 @@ pub struct Dynamics {
     /// slipping ones, and stuck ones in the structure's cluster. A stick
     /// higher up carries a constant force; a free interface has no guard.
     pub changing_guards: u32,
+    /// The guards of `changing_guards`, in order, first `n_guards` entries.
+    pub guards: [Guard; MAX_BODIES],
+    /// Number of entries of `guards`.
+    pub n_guards: usize,
+    /// Interfaces between two clusters, first `n_moving` entries.
+    pub moving: [Moving; MAX_BODIES],
+    /// Number of entries of `moving`.
+    pub n_moving: usize,
 }
 
 impl Dynamics {
@@ -111,6 +155,14 @@ impl Dynamics {
             accel_const: [0.0; MAX_BODIES],
             inv_mass0: 0.0,
             changing_guards: 0,
+            guards: [Guard::Slip {
+                hi: 0,
+                lo: 0,
+                sign: 0.0,
+            }; MAX_BODIES],
+            n_guards: 0,
+            moving: [Moving { j: 0, hi: 0, lo: 0 }; MAX_BODIES],
+            n_moving: 0,
         };
         for i in 0..=sys.n {
             if i == 0 || !mode.is_stuck(i) {
@@ -146,6 +198,31 @@ impl Dynamics {
                 above += sys.mass[j];
                 d.mass_above[j] = above;
             }
+        }
+        for j in 1..=sys.n {
+            let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
+            if hi != lo {
+                d.moving[d.n_moving] = Moving { j, hi, lo };
+                d.n_moving += 1;
+            }
+            if d.changing_guards & (1 << j) == 0 {
+                continue;
+            }
+            d.guards[d.n_guards] = if mode.is_stuck(j) {
+                let (mass_above, f_top) = d.force_affine(j, mode);
+                Guard::Stuck {
+                    mass_above,
+                    f_top,
+                    cap: sys.mus[j] * sys.normal[j] * (1.0 + CONSISTENCY_TOL),
+                }
+            } else {
+                Guard::Slip {
+                    hi,
+                    lo,
+                    sign: mode.contact[j].slip_sign(),
+                }
+            };
+            d.n_guards += 1;
         }
         d
     }
@@ -360,8 +437,8 @@ pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
         let mut mode = req.mode;
         let mut rest = code;
         for &j in zero {
-            mode.contact[j] = [Contact::Stuck, Contact::SlipForward, Contact::SlipBackward]
-                [(rest % 3) as usize];
+            mode.contact[j] =
+                [Contact::Stuck, Contact::SlipForward, Contact::SlipBackward][(rest % 3) as usize];
             rest /= 3;
         }
         if violation(sys, &mode, req.zero, req.load0) <= CONSISTENCY_TOL {

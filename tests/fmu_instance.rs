@@ -323,7 +323,9 @@ fn a_record_rewritten_between_runs_is_read_again() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("step.csv");
     let write = |a: f64, n: usize| {
-        let rows: String = (0..n).map(|i| format!("{},{a}\n", i as f64 * 0.01)).collect();
+        let rows: String = (0..n)
+            .map(|i| format!("{},{a}\n", i as f64 * 0.01))
+            .collect();
         std::fs::write(&path, format!("time,accel\n{rows}")).unwrap();
     };
     let run = |inst: &mut Instance| {

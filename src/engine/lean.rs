@@ -12,27 +12,8 @@
 
 use super::{upper_cluster_step, Excitation, Simulator, StructureRk4};
 use crate::hermite;
-use crate::mode::{self, Contact};
+use crate::mode::Guard;
 use crate::params::MAX_BODIES;
-
-/// A guard of the mode, in the form it is evaluated at a step end.
-#[derive(Clone, Copy)]
-enum Guard {
-    /// A stuck interface in the structure's cluster: its force is
-    /// `mass_above A0 + f_top`, affine in the cluster's absolute acceleration.
-    Stuck { mass_above: f64, f_top: f64, cap: f64 },
-    /// A slipping interface: `sign (v[hi] - v[lo])` of its two clusters.
-    Slip { hi: usize, lo: usize, sign: f64 },
-}
-
-/// An interface between two clusters: its slip changes.
-#[derive(Clone, Copy)]
-struct Moving {
-    j: usize,
-    hi: usize,
-    lo: usize,
-    slip_force: f64,
-}
 
 impl Simulator {
     /// Takes substeps `first..=n` of an interval (substep i ends at
@@ -47,44 +28,12 @@ impl Simulator {
         exc: &Excitation,
         t_ref: f64,
     ) -> usize {
-        let (sys, d, m) = (&self.sys, &self.dynamics, &self.mode);
+        let (sys, d) = (&self.sys, &self.dynamics);
         let rk = StructureRk4::new(sys, d, exc, t_ref);
         let nc = d.n_clusters;
 
-        let mut guards = [Guard::Slip { hi: 0, lo: 0, sign: 0.0 }; MAX_BODIES];
-        let mut n_guards = 0;
-        let mut bits = d.changing_guards;
-        while bits != 0 {
-            let j = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let (mass_above, f_top) = d.force_affine(j, m);
-            guards[n_guards] = match m.contact[j] {
-                Contact::Stuck => Guard::Stuck {
-                    mass_above,
-                    f_top,
-                    // The general guard's slack (see `Segment::guard`).
-                    cap: sys.mus[j] * sys.normal[j] * (1.0 + mode::CONSISTENCY_TOL),
-                },
-                _ => Guard::Slip {
-                    hi: d.cluster_of[j],
-                    lo: d.cluster_of[j - 1],
-                    sign: m.contact[j].slip_sign(),
-                },
-            };
-            n_guards += 1;
-        }
-        let mut moving = [Moving { j: 0, hi: 0, lo: 0, slip_force: 0.0 }; MAX_BODIES];
-        let mut n_moving = 0;
-        for j in 1..=sys.n {
-            let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
-            if hi != lo {
-                let slip_force = d.slip_force[j];
-                moving[n_moving] = Moving { j, hi, lo, slip_force };
-                n_moving += 1;
-            }
-        }
-        let guards = &guards[..n_guards];
-        let moving = &moving[..n_moving];
+        let guards = &d.guards[..d.n_guards];
+        let moving = &d.moving[..d.n_moving];
 
         // Local state: per cluster the displacement since entry and the
         // velocity; the structure's own displacement; work and peaks.
@@ -116,11 +65,16 @@ impl Simulator {
             let ag0 = exc.ag + exc.ag_rate * (t0 - t_ref);
             step[0] = [x1[0] - u0, x1[1], x1[2]];
             for c in 1..nc {
-                step[c] = upper_cluster_step(vel[c], d.accel_const[c], d.mass[c], ag0, exc.ag_rate, hs);
+                step[c] =
+                    upper_cluster_step(vel[c], d.accel_const[c], d.mass[c], ag0, exc.ag_rate, hs);
             }
             for g in guards {
                 let value = match *g {
-                    Guard::Stuck { mass_above, f_top, cap } => cap - (mass_above * a1 + f_top).abs(),
+                    Guard::Stuck {
+                        mass_above,
+                        f_top,
+                        cap,
+                    } => cap - (mass_above * a1 + f_top).abs(),
                     Guard::Slip { hi, lo, sign } => sign * (step[hi][1] - step[lo][1]),
                 };
                 if value < 0.0 {
@@ -132,9 +86,16 @@ impl Simulator {
                 let increment = step[mv.hi][0] - step[mv.lo][0];
                 let (vrel0, vrel1) = (vel[mv.hi] - vel[mv.lo], step[mv.hi][1] - step[mv.lo][1]);
                 let s0 = slip[mv.j];
-                e_friction[mv.j] -= mv.slip_force * increment;
+                e_friction[mv.j] -= d.slip_force[mv.j] * increment;
                 let peak = &mut peak_slip[mv.j];
-                *peak = peak.max(hermite::max_abs_above(s0, vrel0, s0 + increment, vrel1, hs, *peak));
+                *peak = peak.max(hermite::max_abs_above(
+                    s0,
+                    vrel0,
+                    s0 + increment,
+                    vrel1,
+                    hs,
+                    *peak,
+                ));
                 slip[mv.j] = s0 + increment;
             }
             for c in 1..nc {
@@ -142,7 +103,9 @@ impl Simulator {
                 vel[c] = step[c][1];
                 e_input += step[c][2];
             }
-            peak_u0 = peak_u0.max(hermite::max_abs_above(u0, vel[0], x1[0], x1[1], hs, peak_u0));
+            peak_u0 = peak_u0.max(hermite::max_abs_above(
+                u0, vel[0], x1[0], x1[1], hs, peak_u0,
+            ));
             peak_a0 = peak_a0.max(hermite::max_abs_above(a0, jerk0, a1, jerk1, hs, peak_a0));
             shift[0] += x1[0] - u0;
             (u0, vel[0], a0, jerk0) = (x1[0], x1[1], a1, jerk1);
