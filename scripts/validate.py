@@ -72,10 +72,10 @@ def rigid_base_checks(m: Model, out: Path) -> tuple[dict, dict]:
             entry["closed_form"] = "no sliding: peak slip 0"
             entry["passed"] = entry["peak_slip_m"] == 0.0
         else:
-            moving = np.nonzero(np.abs(slip) > 0)[0]
+            moving = np.nonzero(~r["stuck[1]"])[0]
             first = float(r["time"][moving[0]]) if len(moving) else float("nan")
             expected = math.asin(eta) / OMEGA
-            # Slip is sampled every 1e-4 s: the first sample after breakaway.
+            # The stick/slip flag is sampled every 1e-4 s: the first sample after breakaway.
             entry["breakaway_s"] = first
             entry["breakaway_closed_form_s"] = expected
             entry["breakaway_error_s"] = first - expected

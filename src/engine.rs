@@ -51,6 +51,48 @@ impl Excitation {
     }
 }
 
+/// One linear piece of excitation from `t_ref` to `t_end`, cut into `n`
+/// equal substeps of `h`; `i` is the next substep to take (1-based).
+#[derive(Clone, Copy, Debug)]
+struct Piece {
+    exc: Excitation,
+    t_ref: f64,
+    t_end: f64,
+    n: usize,
+    h: f64,
+    i: usize,
+}
+
+impl Piece {
+    fn new(t_ref: f64, t_end: f64, exc: &Excitation, h_max: f64) -> Piece {
+        let length = t_end - t_ref;
+        let (n, h) = if length > 0.0 {
+            let n = substeps(length, h_max);
+            (n as usize, length / n)
+        } else {
+            (0, 0.0)
+        };
+        Piece {
+            exc: *exc,
+            t_ref,
+            t_end,
+            n,
+            h,
+            i: 1,
+        }
+    }
+
+    /// End time of substep `i` (the last one ends exactly at `t_end`).
+    #[inline]
+    fn end_of(&self, i: usize) -> f64 {
+        if i == self.n {
+            self.t_end
+        } else {
+            self.t_ref + i as f64 * self.h
+        }
+    }
+}
+
 /// RK4 step limit for the bare structure: stability needs `h ω_p < 2.83`
 /// (undamped); we keep a margin.
 pub const STABLE_H_OMEGA: f64 = 2.5;
@@ -293,6 +335,33 @@ fn upper_cluster_step(v: f64, accel: f64, mass: f64, ag0: f64, ag_rate: f64, h: 
     let (agm, ag1) = (ag0 + 0.5 * h * ag_rate, ag0 + h * ag_rate);
     let work = -mass * h / 6.0 * (ag0 * v + 4.0 * agm * vm + ag1 * v_end);
     [du, v_end, work]
+}
+
+/// Moves every body with its cluster: the structure to `u0`, the other
+/// bodies of its cluster by keeping their offset from it (so a body stuck
+/// at zero slip stays at exactly zero slip), those of the other clusters by
+/// their cluster's displacement increment `du[c]`; velocities to `v[c]`.
+fn move_bodies(
+    u: &mut [f64; MAX_BODIES],
+    v: &mut [f64; MAX_BODIES],
+    d: &Dynamics,
+    n: usize,
+    u0: f64,
+    du: &[f64; MAX_BODIES],
+    v_cluster: &[f64; MAX_BODIES],
+) {
+    let u0_before = u[0];
+    u[0] = u0;
+    v[0] = v_cluster[0];
+    for i in 1..=n {
+        let c = d.cluster_of[i];
+        u[i] = if c == 0 {
+            u0 + (u[i] - u0_before)
+        } else {
+            u[i] + du[c]
+        };
+        v[i] = v_cluster[c];
+    }
 }
 
 /// One step's frozen ingredients: the mode, the excitation, and every
@@ -548,42 +617,41 @@ impl Simulator {
     /// Advances to `t_end` under an excitation that is linear over
     /// `[now, t_end]` (values given at the current time).
     pub fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
-        exc.check(self.t, t_end)?;
-        let t_ref = self.t;
-        if exc.fext != self.fext_now {
-            // A jump in the external force can break a stick (ag cannot).
-            self.fext_now = exc.fext;
-            self.resolve_mode(0);
-        }
-        self.ag_now = exc.ag;
-        let length = t_end - t_ref;
-        if length > 0.0 {
-            let n = substeps(length, self.h_max);
-            let h = length / n;
-            let n = n as usize;
-            let end_of = |i: usize| if i == n { t_end } else { t_ref + i as f64 * h };
+        self.advance_pieces(std::iter::once((t_end, *exc)))
+    }
+
+    /// Advances through consecutive linear pieces, each given by its end
+    /// time and its excitation (values at its start), exactly as `advance`
+    /// on each in turn; runs of switch-free steps go on across the pieces'
+    /// ends on the fast path.
+    pub fn advance_pieces(
+        &mut self,
+        pieces: impl IntoIterator<Item = (f64, Excitation)>,
+    ) -> Result<(), SimError> {
+        let mut pieces = pieces.into_iter();
+        let mut pending = pieces.next();
+        while let Some((t_end, exc)) = pending.take() {
+            let mut piece = self.begin_piece(t_end, &exc)?;
             match self.settings.method {
-                Method::EventLocated => {
+                Method::EventLocated => loop {
                     // Runs of switch-free steps on the fast path; the step
                     // where a guard fires with event location.
-                    let mut i = 1;
-                    while i <= n {
-                        i = self.lean_steps(i, n, h, t_end, exc, t_ref);
-                        if i <= n {
-                            self.step_located(end_of(i), exc, t_ref);
-                            i += 1;
-                        }
+                    pending = self.lean_steps(&mut piece, &mut pieces);
+                    if piece.i > piece.n {
+                        break;
                     }
-                }
+                    self.step_located(piece.end_of(piece.i), &piece.exc, piece.t_ref);
+                    piece.i += 1;
+                },
                 Method::StepEnd => {
-                    for i in 1..=n {
-                        self.step_switch_at_end(end_of(i), exc, t_ref);
+                    for i in 1..=piece.n {
+                        self.step_switch_at_end(piece.end_of(i), &exc, piece.t_ref);
                     }
+                    pending = pieces.next();
                 }
             }
+            self.end_piece(&piece);
         }
-        self.ag_now = exc.ag + exc.ag_rate * length;
-        self.fext_now = exc.fext + exc.fext_rate * length;
         let n = self.sys.n;
         if !(self.u[..=n]
             .iter()
@@ -593,6 +661,24 @@ impl Simulator {
             return Err(SimError::NonFinite { t: self.t });
         }
         Ok(())
+    }
+
+    /// Checks a piece from the current time and acts on a jump of the
+    /// external force (it can break a stick; `ag` cannot).
+    fn begin_piece(&mut self, t_end: f64, exc: &Excitation) -> Result<Piece, SimError> {
+        exc.check(self.t, t_end)?;
+        if exc.fext != self.fext_now {
+            self.fext_now = exc.fext;
+            self.resolve_mode(0);
+        }
+        Ok(Piece::new(self.t, t_end, exc, self.h_max))
+    }
+
+    /// The inputs at the end of a finished piece.
+    fn end_piece(&mut self, piece: &Piece) {
+        let length = piece.t_end - piece.t_ref;
+        self.ag_now = piece.exc.ag + piece.exc.ag_rate * length;
+        self.fext_now = piece.exc.fext + piece.exc.fext_rate * length;
     }
 
     fn segment(&self, exc: &Excitation, t_ref: f64) -> Segment<'_> {
@@ -651,12 +737,7 @@ impl Simulator {
                 ));
             }
         }
-        for i in 0..=n {
-            let c = d.cluster_of[i];
-            self.u[i] += du[c];
-            self.v[i] = v_end[c];
-        }
-        self.u[0] = x1[0];
+        move_bodies(&mut self.u, &mut self.v, d, n, x1[0], &du, &v_end);
         self.e_input += x1[2] + upper_work;
         self.e_viscous += x1[3];
         self.t += h;

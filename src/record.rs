@@ -303,8 +303,12 @@ pub fn advance_with_record<S: Stepper>(
     extra: &Excitation,
 ) -> Result<(), SimError> {
     let t_start = sim.time();
-    loop {
-        let t = sim.time();
+    let mut t = t_start;
+    let mut done = false;
+    let pieces = std::iter::from_fn(move || {
+        if done {
+            return None;
+        }
         let (a, slope, piece_end) = record.piece_at(t);
         let t1 = piece_end.min(t_end);
         let dt = t - t_start;
@@ -314,11 +318,11 @@ pub fn advance_with_record<S: Stepper>(
             fext: extra.fext + extra.fext_rate * dt,
             fext_rate: extra.fext_rate,
         };
-        sim.advance(t1, &exc)?;
-        if t1 >= t_end {
-            return Ok(());
-        }
-    }
+        t = t1;
+        done = t1 >= t_end;
+        Some((t1, exc))
+    });
+    sim.advance_pieces(pieces)
 }
 
 /// Runs a whole record from the simulator's current time to the record's end.

@@ -14,6 +14,18 @@ pub trait Stepper {
     fn time(&self) -> f64;
     /// Advances to `t_end` under an excitation linear over `[now, t_end]`.
     fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError>;
+
+    /// Advances through consecutive linear pieces (end time, excitation at
+    /// the piece start), as `advance` on each in turn.
+    fn advance_pieces(
+        &mut self,
+        pieces: impl Iterator<Item = (f64, Excitation)>,
+    ) -> Result<(), SimError> {
+        for (t_end, exc) in pieces {
+            self.advance(t_end, &exc)?;
+        }
+        Ok(())
+    }
 }
 
 impl Stepper for Simulator {
@@ -22,6 +34,12 @@ impl Stepper for Simulator {
     }
     fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
         Simulator::advance(self, t_end, exc)
+    }
+    fn advance_pieces(
+        &mut self,
+        pieces: impl Iterator<Item = (f64, Excitation)>,
+    ) -> Result<(), SimError> {
+        Simulator::advance_pieces(self, pieces)
     }
 }
 
@@ -164,6 +182,15 @@ impl Stepper for Solver {
         match self {
             Solver::Exact(s) => s.advance(t_end, exc),
             Solver::Regularized(s) => s.advance(t_end, exc),
+        }
+    }
+    fn advance_pieces(
+        &mut self,
+        pieces: impl Iterator<Item = (f64, Excitation)>,
+    ) -> Result<(), SimError> {
+        match self {
+            Solver::Exact(s) => s.advance_pieces(pieces),
+            Solver::Regularized(s) => Stepper::advance_pieces(s, pieces),
         }
     }
 }

@@ -8,28 +8,29 @@
 //! and peak. The same RK4 step, closed-form upper clusters, guards and
 //! Hermite peaks as the general path are used; the loop stops before the
 //! first step at whose end a guard of the mode is negative, and the caller
-//! takes that step with event location.
+//! takes that step with event location. The loop goes on from one piece of
+//! excitation to the next (a record's samples), so that a whole record costs
+//! one entry when nothing switches.
 
-use super::{upper_cluster_step, Excitation, Simulator, StructureRk4};
+use super::{upper_cluster_step, Excitation, Piece, Simulator, StructureRk4};
 use crate::hermite;
 use crate::mode::Guard;
 use crate::params::MAX_BODIES;
 
 impl Simulator {
-    /// Takes substeps `first..=n` of an interval (substep i ends at
-    /// `t_ref + i h`, the last one at `t_end`) until one would end with a
-    /// guard below zero; returns the index of the first substep not taken.
+    /// Takes the substeps of `piece` from `piece.i` on, then those of the
+    /// following `pieces`, until a substep would end with a guard below
+    /// zero: `piece` is then the piece it belongs to, `piece.i` its index.
+    /// Otherwise `piece` is the last piece taken, finished; a next piece
+    /// that the general path must begin (a jump of the external force, or a
+    /// bad value) is returned untouched.
     pub(super) fn lean_steps(
         &mut self,
-        first: usize,
-        n: usize,
-        h: f64,
-        t_end: f64,
-        exc: &Excitation,
-        t_ref: f64,
-    ) -> usize {
-        let (sys, d) = (&self.sys, &self.dynamics);
-        let rk = StructureRk4::new(sys, d, exc, t_ref);
+        piece: &mut Piece,
+        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+    ) -> Option<(f64, Excitation)> {
+        let (sys, d, h_max) = (&self.sys, &self.dynamics, self.h_max);
+        let mut rk = StructureRk4::new(sys, d, &piece.exc, piece.t_ref);
         let nc = d.n_clusters;
 
         let guards = &d.guards[..d.n_guards];
@@ -56,13 +57,31 @@ impl Simulator {
         // Per cluster over the current step: displacement increment, end
         // velocity, input work (reused from step to step).
         let mut step = [[0.0; 3]; MAX_BODIES];
-        let mut i = first;
-        'steps: while i <= n {
-            let t1 = if i == n { t_end } else { t_ref + i as f64 * h };
+        let mut taken = 0u64;
+        let mut pending = None;
+        'steps: loop {
+            if piece.i > piece.n {
+                let Some((t_end, exc)) = pieces.next() else {
+                    break;
+                };
+                let p = &piece.exc;
+                let fext_end = p.fext + p.fext_rate * (piece.t_end - piece.t_ref);
+                if exc.fext != fext_end || exc.check(t0, t_end).is_err() {
+                    pending = Some((t_end, exc));
+                    break;
+                }
+                *piece = Piece::new(t0, t_end, &exc, h_max);
+                rk = StructureRk4::new(sys, d, &piece.exc, piece.t_ref);
+                // The acceleration's slope jumps with the excitation's.
+                (a0, jerk0) = rk.accel_and_jerk(t0, u0, vel[0]);
+                continue;
+            }
+            let exc = &piece.exc;
+            let t1 = piece.end_of(piece.i);
             let hs = t1 - t0;
             let x1 = rk.step(t0, u0, vel[0], hs);
             let (a1, jerk1) = rk.accel_and_jerk(t1, x1[0], x1[1]);
-            let ag0 = exc.ag + exc.ag_rate * (t0 - t_ref);
+            let ag0 = exc.ag + exc.ag_rate * (t0 - piece.t_ref);
             step[0] = [x1[0] - u0, x1[1], x1[2]];
             for c in 1..nc {
                 step[c] =
@@ -112,18 +131,12 @@ impl Simulator {
             e_input += x1[2];
             e_viscous += x1[3];
             t0 = t1;
-            i += 1;
+            piece.i += 1;
+            taken += 1;
         }
 
-        let taken = (i - first) as u64;
         if taken > 0 {
-            for b in 1..=sys.n {
-                let c = d.cluster_of[b];
-                self.u[b] += shift[c];
-                self.v[b] = vel[c];
-            }
-            self.u[0] = u0;
-            self.v[0] = vel[0];
+            super::move_bodies(&mut self.u, &mut self.v, d, sys.n, u0, &shift, &vel);
             for mv in moving {
                 self.e_friction[mv.j] += e_friction[mv.j];
             }
@@ -135,6 +148,6 @@ impl Simulator {
             self.t = t0;
             self.stats.steps += taken;
         }
-        i
+        pending
     }
 }

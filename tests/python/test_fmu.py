@@ -30,10 +30,15 @@ def fmu() -> Path:
     return sll.build_fmu()
 
 
+@pytest.fixture(scope="session", autouse=True)
+def engine_run_is_fresh():
+    # A no-op when up to date; never compare with a stale binary.
+    subprocess.run(["cargo", "build", "--release", "--bin", "engine_run"], cwd=ROOT, check=True,
+                   capture_output=True)
+
+
 def engine(record: Path, *flags: str) -> dict:
     exe = ROOT / "target" / "release" / "engine_run"
-    if not exe.exists():
-        subprocess.run(["cargo", "build", "--release", "--bin", "engine_run"], cwd=ROOT, check=True)
     out = subprocess.run([str(exe), str(record), *flags], check=True, capture_output=True, text=True)
     return json.loads(out.stdout)
 
