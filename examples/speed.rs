@@ -7,7 +7,18 @@ fn main() {
         .unwrap_or(2);
     let mut p = Params::default();
     p.n_blocks = n;
-    let gm = synthetic::default_record();
+    // RECORD=path: a record file instead of the embedded default (first 20 s).
+    let gm = match std::env::var("RECORD") {
+        Ok(path) => {
+            let gm = GroundMotion::read(std::path::Path::new(&path), 9.81).unwrap();
+            let n = gm.time.iter().take_while(|&&t| t <= 20.0 + 1e-9).count();
+            GroundMotion {
+                time: gm.time[..n].to_vec(),
+                accel: gm.accel[..n].to_vec(),
+            }
+        }
+        Err(_) => synthetic::default_record(),
+    };
     let reps: usize = std::env::var("REPS")
         .ok()
         .map(|s| s.parse().unwrap())
