@@ -419,7 +419,7 @@ impl Segment<'_> {
                 let (_, fext) = self.rk.inputs(self.t0 + tau);
                 let load0 = Dynamics::structure_load(self.sys, x[0], x[1], fext);
                 let f = d.force(j, self.mode, load0);
-                self.sys.mus[j] * self.sys.normal[j] * (1.0 + mode::CONSISTENCY_TOL) - f.abs()
+                mode::stick_capacity(self.sys, j) - f.abs()
             }
             Contact::SlipForward | Contact::SlipBackward => {
                 let v_rel = self.velocity(d.cluster_of[j], x, tau)

@@ -213,7 +213,7 @@ impl Dynamics {
                 Guard::Stuck {
                     mass_above,
                     f_top,
-                    cap: sys.mus[j] * sys.normal[j] * (1.0 + CONSISTENCY_TOL),
+                    cap: stick_capacity(sys, j),
                 }
             } else {
                 Guard::Slip {
@@ -287,6 +287,13 @@ impl Dynamics {
 /// Numerical slack of the consistency checks, relative to the natural scale
 /// of each quantity (`mus N` for forces, `g` for accelerations).
 pub const CONSISTENCY_TOL: f64 = 1e-10;
+
+/// Largest stick force interface j holds before a guard fires: `mus N`
+/// with the consistency slack, so that a stick the resolver accepted
+/// starts with a guard >= 0 (see the README, "Events").
+pub fn stick_capacity(sys: &System, j: usize) -> f64 {
+    sys.mus[j] * sys.normal[j] * (1.0 + CONSISTENCY_TOL)
+}
 
 /// Largest violation of the contact law by `mode` at an instant, among the
 /// interfaces in `zero` (bit j set: relative velocity exactly zero). Zero
