@@ -5,17 +5,28 @@
 //! a run of such steps is taken here with the mode's constants hoisted out of
 //! the loop and the state in local variables: per cluster one displacement
 //! increment and one velocity, per slipping interface its slip, friction work
-//! and peak. The same RK4 step, closed-form upper clusters, guards and
-//! Hermite peaks as the general path are used; the loop stops before the
-//! first step at whose end a guard of the mode is negative, and the caller
-//! takes that step with event location. The loop goes on from one piece of
-//! excitation to the next (a record's samples), so that a whole record costs
-//! one entry when nothing switches.
+//! and peak. The RK4 step of the structure's cluster is written as the affine
+//! map it is for this linear system ([`Rk4Map`]); the upper clusters, guards
+//! and Hermite peaks are those of the general path. The loop stops before
+//! the first step at whose end a guard of the mode is negative, and the
+//! caller takes that step with event location. The loop goes on from one
+//! piece of excitation to the next (a record's samples), so that a whole
+//! record costs one entry when nothing switches.
+//!
+//! A mode with every body in the structure's cluster (all interfaces stuck,
+//! and always for a bare structure) has a loop of its own: one degree of
+//! freedom, and its guards reduce to a band of the structure's acceleration.
 
-use super::{upper_cluster_step, Excitation, Piece, Simulator, StructureRk4};
+use super::{upper_cluster_step, Excitation, Piece, Simulator};
 use crate::hermite;
-use crate::mode::Guard;
+use crate::mode::{Dynamics, Guard};
 use crate::params::MAX_BODIES;
+use crate::system::System;
+
+/// A relative difference of step lengths above which the affine map is
+/// built again; below it the difference is rounding of the piece's end
+/// times, and [`Rk4Map::step`] corrects for it to first order.
+const SAME_STEP: f64 = 1e-9;
 
 impl Simulator {
     /// Takes the substeps of `piece` from `piece.i` on, then those of the
@@ -29,10 +40,82 @@ impl Simulator {
         piece: &mut Piece,
         pieces: &mut impl Iterator<Item = (f64, Excitation)>,
     ) -> Option<(f64, Excitation)> {
-        let (sys, d, h_max) = (&self.sys, &self.dynamics, self.h_max);
-        let mut rk = StructureRk4::new(sys, d, &piece.exc, piece.t_ref);
-        let nc = d.n_clusters;
+        if self.dynamics.n_clusters == 1 {
+            self.lean_steps_one_cluster(piece, pieces)
+        } else {
+            self.lean_steps_clusters(piece, pieces)
+        }
+    }
 
+    /// The fast path for a mode with a single cluster: the structure with
+    /// every block stuck on it.
+    fn lean_steps_one_cluster(
+        &mut self,
+        piece: &mut Piece,
+        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+    ) -> Option<(f64, Excitation)> {
+        let d = &self.dynamics;
+        let mut st = Stepping::new(&self.sys, d, piece, self.h_max);
+        let guards = &d.guards[..d.n_guards];
+        let (band_lo, band_hi) = safe_accel_band(guards);
+
+        let (mut u0, mut v0, mut t0) = (self.u[0], self.v[0], self.t);
+        let (mut e_input, mut e_viscous) = (0.0, 0.0);
+        let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
+        let (mut a0, mut jerk0) = st.accel_and_jerk(piece, t0, u0, v0);
+        let mut taken = 0u64;
+        let mut pending = None;
+        loop {
+            if piece.i > piece.n {
+                if !st.next_piece(piece, pieces, t0, &mut pending) {
+                    break;
+                }
+                (a0, jerk0) = st.accel_and_jerk(piece, t0, u0, v0);
+                continue;
+            }
+            let (t1, hs) = st.substep(piece, t0);
+            let x = st.step(piece, t0, hs, u0, v0);
+            // Inside the band no stick can break; near or outside it the
+            // guards decide exactly as on the general path.
+            if !(x.accel >= band_lo && x.accel <= band_hi) && any_stuck_guard_fires(guards, x.accel)
+            {
+                break;
+            }
+            peak_u0 = peak_u0.max(hermite::max_abs_above(u0, v0, x.u, x.v, hs, peak_u0));
+            peak_a0 = peak_a0.max(hermite::max_abs_above(
+                a0, jerk0, x.accel, x.jerk, hs, peak_a0,
+            ));
+            (u0, v0, a0, jerk0) = (x.u, x.v, x.accel, x.jerk);
+            e_input += x.input;
+            e_viscous += x.viscous;
+            t0 = t1;
+            piece.i += 1;
+            taken += 1;
+        }
+
+        if taken > 0 {
+            let vel = [v0; MAX_BODIES];
+            let shift = [0.0; MAX_BODIES]; // used by other clusters only
+            super::move_bodies(&mut self.u, &mut self.v, d, self.sys.n, u0, &shift, &vel);
+            self.e_input += e_input;
+            self.e_viscous += e_viscous;
+            self.peak_u0 = peak_u0;
+            self.peak_a0 = peak_a0;
+            self.t = t0;
+            self.stats.steps += taken;
+        }
+        pending
+    }
+
+    /// The fast path for a mode with several clusters.
+    fn lean_steps_clusters(
+        &mut self,
+        piece: &mut Piece,
+        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+    ) -> Option<(f64, Excitation)> {
+        let d = &self.dynamics;
+        let mut st = Stepping::new(&self.sys, d, piece, self.h_max);
+        let nc = d.n_clusters;
         let guards = &d.guards[..d.n_guards];
         let moving = &d.moving[..d.n_moving];
 
@@ -52,7 +135,7 @@ impl Simulator {
         let mut e_friction = [0.0; MAX_BODIES];
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let mut peak_slip = self.peak_slip;
-        let (mut a0, mut jerk0) = rk.accel_and_jerk(t0, u0, vel[0]);
+        let (mut a0, mut jerk0) = st.accel_and_jerk(piece, t0, u0, vel[0]);
 
         // Per cluster over the current step: displacement increment, end
         // velocity, input work (reused from step to step).
@@ -61,42 +144,23 @@ impl Simulator {
         let mut pending = None;
         'steps: loop {
             if piece.i > piece.n {
-                let Some((t_end, exc)) = pieces.next() else {
-                    break;
-                };
-                let p = &piece.exc;
-                let fext_end = p.fext + p.fext_rate * (piece.t_end - piece.t_ref);
-                if exc.fext != fext_end || exc.check(t0, t_end).is_err() {
-                    pending = Some((t_end, exc));
+                if !st.next_piece(piece, pieces, t0, &mut pending) {
                     break;
                 }
-                *piece = Piece::new(t0, t_end, &exc, h_max);
-                rk = StructureRk4::new(sys, d, &piece.exc, piece.t_ref);
-                // The acceleration's slope jumps with the excitation's.
-                (a0, jerk0) = rk.accel_and_jerk(t0, u0, vel[0]);
+                (a0, jerk0) = st.accel_and_jerk(piece, t0, u0, vel[0]);
                 continue;
             }
             let exc = &piece.exc;
-            let t1 = piece.end_of(piece.i);
-            let hs = t1 - t0;
-            let x1 = rk.step(t0, u0, vel[0], hs);
-            let (a1, jerk1) = rk.accel_and_jerk(t1, x1[0], x1[1]);
+            let (t1, hs) = st.substep(piece, t0);
+            let x = st.step(piece, t0, hs, u0, vel[0]);
             let ag0 = exc.ag + exc.ag_rate * (t0 - piece.t_ref);
-            step[0] = [x1[0] - u0, x1[1], x1[2]];
+            step[0] = [x.u - u0, x.v, x.input];
             for c in 1..nc {
                 step[c] =
                     upper_cluster_step(vel[c], d.accel_const[c], d.mass[c], ag0, exc.ag_rate, hs);
             }
             for g in guards {
-                let value = match *g {
-                    Guard::Stuck {
-                        mass_above,
-                        f_top,
-                        cap,
-                    } => cap - (mass_above * a1 + f_top).abs(),
-                    Guard::Slip { hi, lo, sign } => sign * (step[hi][1] - step[lo][1]),
-                };
-                if value < 0.0 {
+                if guard_at_end(g, x.accel, &step) < 0.0 {
                     break 'steps;
                 }
             }
@@ -122,21 +186,20 @@ impl Simulator {
                 vel[c] = step[c][1];
                 e_input += step[c][2];
             }
-            peak_u0 = peak_u0.max(hermite::max_abs_above(
-                u0, vel[0], x1[0], x1[1], hs, peak_u0,
+            peak_u0 = peak_u0.max(hermite::max_abs_above(u0, vel[0], x.u, x.v, hs, peak_u0));
+            peak_a0 = peak_a0.max(hermite::max_abs_above(
+                a0, jerk0, x.accel, x.jerk, hs, peak_a0,
             ));
-            peak_a0 = peak_a0.max(hermite::max_abs_above(a0, jerk0, a1, jerk1, hs, peak_a0));
-            shift[0] += x1[0] - u0;
-            (u0, vel[0], a0, jerk0) = (x1[0], x1[1], a1, jerk1);
-            e_input += x1[2];
-            e_viscous += x1[3];
+            (u0, vel[0], a0, jerk0) = (x.u, x.v, x.accel, x.jerk);
+            e_input += x.input;
+            e_viscous += x.viscous;
             t0 = t1;
             piece.i += 1;
             taken += 1;
         }
 
         if taken > 0 {
-            super::move_bodies(&mut self.u, &mut self.v, d, sys.n, u0, &shift, &vel);
+            super::move_bodies(&mut self.u, &mut self.v, d, self.sys.n, u0, &shift, &vel);
             for mv in moving {
                 self.e_friction[mv.j] += e_friction[mv.j];
             }
@@ -150,4 +213,281 @@ impl Simulator {
         }
         pending
     }
+}
+
+/// Guard `g` at a step end where the structure's absolute acceleration is
+/// `a1` and `step[c][1]` is the velocity of cluster c.
+#[inline]
+fn guard_at_end(g: &Guard, a1: f64, step: &[[f64; 3]; MAX_BODIES]) -> f64 {
+    match *g {
+        Guard::Stuck {
+            mass_above,
+            f_top,
+            cap,
+        } => cap - (mass_above * a1 + f_top).abs(),
+        Guard::Slip { hi, lo, sign } => sign * (step[hi][1] - step[lo][1]),
+    }
+}
+
+/// Whether a guard of a one-cluster mode is negative at a step end where
+/// the structure's absolute acceleration is `a1`.
+fn any_stuck_guard_fires(guards: &[Guard], a1: f64) -> bool {
+    let step = [[0.0; 3]; MAX_BODIES]; // one cluster: no slip guards
+    guards.iter().any(|g| guard_at_end(g, a1, &step) < 0.0)
+}
+
+/// A band of the structure's absolute acceleration inside which every
+/// stuck guard of `guards` is positive by a margin far above rounding: the
+/// stick `|mass_above A + f_top| <= cap` solved for A and shrunk by 1e-12
+/// of its scale. Empty when a guard is not a stick.
+fn safe_accel_band(guards: &[Guard]) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    for g in guards {
+        match *g {
+            Guard::Stuck {
+                mass_above,
+                f_top,
+                cap,
+            } => {
+                let margin = 1e-12 * (cap + f_top.abs()) / mass_above;
+                lo = lo.max((-cap - f_top) / mass_above + margin);
+                hi = hi.min((cap - f_top) / mass_above - margin);
+            }
+            Guard::Slip { .. } => return (f64::INFINITY, f64::NEG_INFINITY),
+        }
+    }
+    (lo, hi)
+}
+
+/// What the fast path steps with over the current piece: the structure's
+/// RK4 step as an affine map, and the piece's constant terms.
+struct Stepping<'a> {
+    sys: &'a System,
+    d: &'a Dynamics,
+    h_max: f64,
+    map: Rk4Map,
+    forced: Forced,
+}
+
+impl<'a> Stepping<'a> {
+    fn new(sys: &'a System, d: &'a Dynamics, piece: &Piece, h_max: f64) -> Stepping<'a> {
+        let map = Rk4Map::new(sys, d, piece.h);
+        Stepping {
+            sys,
+            d,
+            h_max,
+            forced: map.forced(&piece.exc),
+            map,
+        }
+    }
+
+    /// Moves on from the finished `piece`, at `t0`, to the next of `pieces`.
+    /// False when the fast path must stop: no piece left, or one that the
+    /// general path must begin (a jump of the external force, which can
+    /// break a stick, or a bad value), which is put in `pending`.
+    fn next_piece(
+        &mut self,
+        piece: &mut Piece,
+        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+        t0: f64,
+        pending: &mut Option<(f64, Excitation)>,
+    ) -> bool {
+        let Some((t_end, exc)) = pieces.next() else {
+            return false;
+        };
+        let p = &piece.exc;
+        let fext_end = p.fext + p.fext_rate * (piece.t_end - piece.t_ref);
+        if exc.fext != fext_end || exc.check(t0, t_end).is_err() {
+            *pending = Some((t_end, exc));
+            return false;
+        }
+        *piece = Piece::new(t0, t_end, &exc, self.h_max);
+        if (piece.h - self.map.h).abs() > SAME_STEP * self.map.h {
+            self.map = Rk4Map::new(self.sys, self.d, piece.h);
+        }
+        self.forced = self.map.forced(&piece.exc);
+        true
+    }
+
+    /// End time and length of the substep `piece.i` from `t0`: the map's step,
+    /// except that the piece's last substep ends exactly at its end.
+    #[inline]
+    fn substep(&self, piece: &Piece, t0: f64) -> (f64, f64) {
+        if piece.i == piece.n {
+            (piece.t_end, piece.t_end - t0)
+        } else {
+            (t0 + self.map.h, self.map.h)
+        }
+    }
+
+    /// The structure's cluster after a substep of length `hs` from (u, v)
+    /// at `t0`.
+    #[inline]
+    fn step(&self, piece: &Piece, t0: f64, hs: f64, u: f64, v: f64) -> StepEnd {
+        self.map.step(&self.forced, t0 - piece.t_ref, hs, u, v)
+    }
+
+    /// The structure's absolute acceleration and its rate at `t0`.
+    fn accel_and_jerk(&self, piece: &Piece, t0: f64, u: f64, v: f64) -> (f64, f64) {
+        let tau = t0 - piece.t_ref;
+        let (force, ag) = self.map.input_force(&self.forced, tau);
+        self.map.accel_and_jerk(&self.forced, force, ag, u, v)
+    }
+}
+
+/// The structure's cluster at the end of a fast-path step.
+#[derive(Clone, Copy, Debug)]
+struct StepEnd {
+    u: f64,
+    v: f64,
+    /// Input and viscous work over the step.
+    input: f64,
+    viscous: f64,
+    /// Absolute acceleration and its time derivative.
+    accel: f64,
+    jerk: f64,
+}
+
+/// RK4's step for the structure's cluster as the affine map that it is for
+/// this linear ODE under a force linear in time: the stages of
+/// `StructureRk4::step` evaluated once per mode and step length on unit
+/// inputs, so that a step is a few independent dot products instead of four
+/// dependent stage evaluations (same method, same result up to rounding).
+/// With `f(τ) = f0 + f1 τ` the cluster's forcing per unit mass (τ from the
+/// step start), the end state (u1, v1) and the stage velocities V2, V3, V4
+/// are linear in (u, v, f0, f1); the work integrals are RK4's quadrature over
+/// the stage velocities.
+#[derive(Clone, Copy, Debug)]
+struct Rk4Map {
+    /// Step length.
+    h: f64,
+    /// Coefficients of (u, v, f0, f1) for u1, v1, V2, V3, V4.
+    rows: [[f64; 4]; 5],
+    mass: f64,
+    inv_mass: f64,
+    slip_load: f64,
+    /// k / mass and c / mass of the cluster.
+    w2: f64,
+    cm: f64,
+    c: f64,
+}
+
+/// The parts of a step that are constant over a piece.
+#[derive(Clone, Copy, Debug)]
+struct Forced {
+    exc: Excitation,
+    /// `rows[r][3] f1` for each output r.
+    slope_terms: [f64; 5],
+    /// Slope of the input force `fext - m ag` (N/s).
+    force_rate: f64,
+}
+
+impl Rk4Map {
+    fn new(sys: &System, d: &Dynamics, h: f64) -> Rk4Map {
+        let (w2, cm) = (sys.k * d.inv_mass0, sys.c * d.inv_mass0);
+        let unit = |i: usize| {
+            let e = |j: usize| if i == j { 1.0 } else { 0.0 };
+            rk4_stages(w2, cm, h, [e(0), e(1), e(2), e(3)])
+        };
+        let columns = [unit(0), unit(1), unit(2), unit(3)];
+        let rows = std::array::from_fn(|r| columns.map(|column| column[r]));
+        Rk4Map {
+            h,
+            rows,
+            mass: d.mass[0],
+            inv_mass: d.inv_mass0,
+            slip_load: d.slip_load[0],
+            w2,
+            cm,
+            c: sys.c,
+        }
+    }
+
+    fn forced(&self, exc: &Excitation) -> Forced {
+        let force_rate = exc.fext_rate - self.mass * exc.ag_rate;
+        let f1 = force_rate * self.inv_mass;
+        Forced {
+            exc: *exc,
+            slope_terms: self.rows.map(|row| row[3] * f1),
+            force_rate,
+        }
+    }
+
+    /// The input force `fext - m ag` on the cluster and `ag` at `tau` into
+    /// the piece.
+    #[inline]
+    fn input_force(&self, forced: &Forced, tau: f64) -> (f64, f64) {
+        let exc = &forced.exc;
+        let ag = exc.ag + exc.ag_rate * tau;
+        (exc.fext + exc.fext_rate * tau - self.mass * ag, ag)
+    }
+
+    /// Absolute acceleration and its rate at a state, where the input force
+    /// is `force` and the ground acceleration `ag`.
+    #[inline]
+    fn accel_and_jerk(&self, forced: &Forced, force: f64, ag: f64, u: f64, v: f64) -> (f64, f64) {
+        let relative = (self.slip_load + force) * self.inv_mass - self.w2 * u - self.cm * v;
+        let jerk = forced.exc.fext_rate * self.inv_mass - self.w2 * v - self.cm * relative;
+        (relative + ag, jerk)
+    }
+
+    /// One step of length `hs` from (u, v) at `tau` into the piece. `hs` is
+    /// `self.h` except on a piece's last substep, where it differs by
+    /// rounding of the piece's end times (at most [`SAME_STEP`] relative):
+    /// that rest is carried to first order with the rates at the end.
+    #[inline]
+    fn step(&self, forced: &Forced, tau: f64, hs: f64, u: f64, v: f64) -> StepEnd {
+        let (force, _) = self.input_force(forced, tau);
+        let f0 = (self.slip_load + force) * self.inv_mass;
+        let out = |r: usize| {
+            let row = &self.rows[r];
+            row[0] * u + row[1] * v + row[2] * f0 + forced.slope_terms[r]
+        };
+        let (u1, v1, v2, v3, v4) = (out(0), out(1), out(2), out(3), out(4));
+        let h = self.h;
+        let force_mid = force + 0.5 * h * forced.force_rate;
+        let force_end = force + h * forced.force_rate;
+        let w = h / 6.0;
+        let mut end = StepEnd {
+            u: u1,
+            v: v1,
+            input: w * (force * v + 2.0 * force_mid * (v2 + v3) + force_end * v4),
+            viscous: w * self.c * (v * v + 2.0 * (v2 * v2 + v3 * v3) + v4 * v4),
+            accel: 0.0,
+            jerk: 0.0,
+        };
+        let ag_end = forced.exc.ag + forced.exc.ag_rate * (tau + h);
+        (end.accel, end.jerk) = self.accel_and_jerk(forced, force_end, ag_end, u1, v1);
+        if hs != h {
+            let delta = hs - h;
+            let relative = end.accel - ag_end;
+            end.u += delta * v1;
+            end.v += delta * relative;
+            end.input += delta * force_end * v1;
+            end.viscous += delta * self.c * v1 * v1;
+            end.accel += delta * end.jerk;
+        }
+        end
+    }
+}
+
+/// RK4's stages for u' = v, v' = f0 + f1 τ - w2 u - cm v over one step `h`
+/// from `[u, v, f0, f1]`: (u1, v1, V2, V3, V4), linear in the four inputs.
+fn rk4_stages(w2: f64, cm: f64, h: f64, [u, v, f0, f1]: [f64; 4]) -> [f64; 5] {
+    let accel = |tau: f64, u: f64, v: f64| f0 + f1 * tau - w2 * u - cm * v;
+    let a1 = accel(0.0, u, v);
+    let (u2, v2) = (u + 0.5 * h * v, v + 0.5 * h * a1);
+    let a2 = accel(0.5 * h, u2, v2);
+    let (u3, v3) = (u + 0.5 * h * v2, v + 0.5 * h * a2);
+    let a3 = accel(0.5 * h, u3, v3);
+    let (u4, v4) = (u + h * v3, v + h * a3);
+    let a4 = accel(h, u4, v4);
+    let w = h / 6.0;
+    [
+        u + w * (v + 2.0 * (v2 + v3) + v4),
+        v + w * (a1 + 2.0 * (a2 + a3) + a4),
+        v2,
+        v3,
+        v4,
+    ]
 }
