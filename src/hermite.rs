@@ -5,18 +5,24 @@
 /// Largest |p(θ)| over θ in [0, 1] for the cubic with values `y0`, `y1` and
 /// time derivatives `d0`, `d1` at the ends of a step of length `h`.
 pub fn max_abs(y0: f64, d0: f64, y1: f64, d1: f64, h: f64) -> f64 {
-    max_abs_above(y0, d0, y1, d1, h, 0.0)
+    max_abs_interior(y0, d0, y1, d1, h)
 }
 
 /// Like [`max_abs`], but returns early (with a value <= `floor`) when the
 /// cubic cannot exceed `floor`: the Hermite basis bounds |p| by
 /// max(|y0|, |y1|) + 4/27 h (|d0| + |d1|).
-#[inline]
+#[inline(always)]
 pub fn max_abs_above(y0: f64, d0: f64, y1: f64, d1: f64, h: f64, floor: f64) -> f64 {
     let ends = y0.abs().max(y1.abs());
     if ends + 4.0 / 27.0 * h * (d0.abs() + d1.abs()) <= floor {
         return ends;
     }
+    max_abs_interior(y0, d0, y1, d1, h)
+}
+
+/// [`max_abs`] itself, out of line: called on a few steps only.
+#[inline(never)]
+fn max_abs_interior(y0: f64, d0: f64, y1: f64, d1: f64, h: f64) -> f64 {
     let b = h * d0;
     let c = 3.0 * (y1 - y0) - h * (2.0 * d0 + d1);
     let d = 2.0 * (y0 - y1) + h * (d0 + d1);

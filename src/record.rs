@@ -140,8 +140,13 @@ impl GroundMotion {
     /// The linear piece that holds at `t` (looking forward): its value at
     /// `t`, its slope, and where it ends (the next sample, or infinity).
     pub fn piece_at(&self, t: f64) -> (f64, f64, f64) {
+        self.piece_before(self.first_after(t), t)
+    }
+
+    /// The piece that holds at `t` when `i` is the first sample after `t`.
+    #[inline]
+    fn piece_before(&self, i: usize, t: f64) -> (f64, f64, f64) {
         let n = self.time.len();
-        let i = self.first_after(t);
         if i == 0 {
             let end = self.time.first().copied().unwrap_or(f64::INFINITY);
             return (0.0, 0.0, end);
@@ -305,11 +310,16 @@ pub fn advance_with_record<S: Stepper>(
     let t_start = sim.time();
     let mut t = t_start;
     let mut done = false;
+    // First sample after `t`, carried from piece to piece.
+    let mut next_sample = record.first_after(t);
     let pieces = std::iter::from_fn(move || {
         if done {
             return None;
         }
-        let (a, slope, piece_end) = record.piece_at(t);
+        while next_sample < record.time.len() && record.time[next_sample] <= t {
+            next_sample += 1;
+        }
+        let (a, slope, piece_end) = record.piece_before(next_sample, t);
         let t1 = piece_end.min(t_end);
         let dt = t - t_start;
         let exc = Excitation {

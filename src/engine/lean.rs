@@ -40,10 +40,18 @@ impl Simulator {
         piece: &mut Piece,
         pieces: &mut impl Iterator<Item = (f64, Excitation)>,
     ) -> Option<(f64, Excitation)> {
-        if self.dynamics.n_clusters == 1 {
-            self.lean_steps_one_cluster(piece, pieces)
-        } else {
-            self.lean_steps_clusters(piece, pieces)
+        // One loop per cluster count, so that the per-cluster arrays are
+        // short, fixed and kept in registers.
+        match self.dynamics.n_clusters {
+            1 => self.lean_steps_one_cluster(piece, pieces),
+            2 => self.lean_steps_clusters::<2>(piece, pieces),
+            3 => self.lean_steps_clusters::<3>(piece, pieces),
+            4 => self.lean_steps_clusters::<4>(piece, pieces),
+            5 => self.lean_steps_clusters::<5>(piece, pieces),
+            6 => self.lean_steps_clusters::<6>(piece, pieces),
+            7 => self.lean_steps_clusters::<7>(piece, pieces),
+            8 => self.lean_steps_clusters::<8>(piece, pieces),
+            _ => self.lean_steps_clusters::<MAX_BODIES>(piece, pieces),
         }
     }
 
@@ -107,39 +115,42 @@ impl Simulator {
         pending
     }
 
-    /// The fast path for a mode with several clusters.
-    fn lean_steps_clusters(
+    /// The fast path for a mode with `NC` >= 2 clusters. Cluster 0 is the
+    /// structure's; moving interface m lies between clusters m and m + 1.
+    fn lean_steps_clusters<const NC: usize>(
         &mut self,
         piece: &mut Piece,
         pieces: &mut impl Iterator<Item = (f64, Excitation)>,
     ) -> Option<(f64, Excitation)> {
         let d = &self.dynamics;
+        debug_assert_eq!(d.n_clusters, NC);
         let mut st = Stepping::new(&self.sys, d, piece, self.h_max);
-        let nc = d.n_clusters;
         let guards = &d.guards[..d.n_guards];
-        let moving = &d.moving[..d.n_moving];
+        let (band_lo, band_hi) = safe_accel_band(guards);
+        // Per moving interface: its index j, and the sign of its slip (0 for
+        // a free interface, which has no guard).
+        let iface: [usize; NC] = std::array::from_fn(|m| d.moving[m.min(NC - 2)].j);
+        let mut slip_sign = [0.0; NC];
+        for g in guards {
+            if let Guard::Slip { lo, sign, .. } = *g {
+                slip_sign[lo] = sign;
+            }
+        }
 
         // Local state: per cluster the displacement since entry and the
-        // velocity; the structure's own displacement; work and peaks.
-        let mut shift = [0.0; MAX_BODIES];
-        let mut vel = [0.0; MAX_BODIES];
-        for c in 0..nc {
-            vel[c] = self.v[d.bottom[c]];
-        }
-        let mut slip = [0.0; MAX_BODIES];
-        for mv in moving {
-            slip[mv.j] = self.u[mv.j] - self.u[mv.j - 1];
-        }
+        // velocity; per moving interface its slip, friction work and peak.
+        let mut shift = [0.0; NC];
+        let mut vel: [f64; NC] = std::array::from_fn(|c| self.v[d.bottom[c]]);
+        let mut slip: [f64; NC] = std::array::from_fn(|m| {
+            let j = iface[m];
+            self.u[j] - self.u[j - 1]
+        });
+        let mut peak_slip: [f64; NC] = std::array::from_fn(|m| self.peak_slip[iface[m]]);
+        let mut e_friction = [0.0; NC];
         let (mut u0, mut t0) = (self.u[0], self.t);
         let (mut e_input, mut e_viscous) = (0.0, 0.0);
-        let mut e_friction = [0.0; MAX_BODIES];
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
-        let mut peak_slip = self.peak_slip;
         let (mut a0, mut jerk0) = st.accel_and_jerk(piece, t0, u0, vel[0]);
-
-        // Per cluster over the current step: displacement increment, end
-        // velocity, input work (reused from step to step).
-        let mut step = [[0.0; 3]; MAX_BODIES];
         let mut taken = 0u64;
         let mut pending = None;
         'steps: loop {
@@ -154,23 +165,32 @@ impl Simulator {
             let (t1, hs) = st.substep(piece, t0);
             let x = st.step(piece, t0, hs, u0, vel[0]);
             let ag0 = exc.ag + exc.ag_rate * (t0 - piece.t_ref);
-            step[0] = [x.u - u0, x.v, x.input];
-            for c in 1..nc {
-                step[c] =
+            // Per cluster over the step: displacement increment, end velocity.
+            let (mut du, mut v_end) = ([0.0; NC], [0.0; NC]);
+            (du[0], v_end[0]) = (x.u - u0, x.v);
+            let mut upper_work = 0.0;
+            for c in 1..NC {
+                let [dc, vc, work] =
                     upper_cluster_step(vel[c], d.accel_const[c], d.mass[c], ag0, exc.ag_rate, hs);
+                (du[c], v_end[c]) = (dc, vc);
+                upper_work += work;
             }
-            for g in guards {
-                if guard_at_end(g, x.accel, &step) < 0.0 {
+            if !(x.accel >= band_lo && x.accel <= band_hi) && any_stuck_guard_fires(guards, x.accel)
+            {
+                break;
+            }
+            for m in 0..NC - 1 {
+                if slip_sign[m] * (v_end[m + 1] - v_end[m]) < 0.0 {
                     break 'steps;
                 }
             }
             // No switch in this step: take it.
-            for mv in moving {
-                let increment = step[mv.hi][0] - step[mv.lo][0];
-                let (vrel0, vrel1) = (vel[mv.hi] - vel[mv.lo], step[mv.hi][1] - step[mv.lo][1]);
-                let s0 = slip[mv.j];
-                e_friction[mv.j] -= d.slip_force[mv.j] * increment;
-                let peak = &mut peak_slip[mv.j];
+            for m in 0..NC - 1 {
+                let increment = du[m + 1] - du[m];
+                let (vrel0, vrel1) = (vel[m + 1] - vel[m], v_end[m + 1] - v_end[m]);
+                let s0 = slip[m];
+                e_friction[m] -= d.slip_force[iface[m]] * increment;
+                let peak = &mut peak_slip[m];
                 *peak = peak.max(hermite::max_abs_above(
                     s0,
                     vrel0,
@@ -179,19 +199,17 @@ impl Simulator {
                     hs,
                     *peak,
                 ));
-                slip[mv.j] = s0 + increment;
+                slip[m] = s0 + increment;
             }
-            for c in 1..nc {
-                shift[c] += step[c][0];
-                vel[c] = step[c][1];
-                e_input += step[c][2];
+            for c in 1..NC {
+                shift[c] += du[c];
             }
             peak_u0 = peak_u0.max(hermite::max_abs_above(u0, vel[0], x.u, x.v, hs, peak_u0));
             peak_a0 = peak_a0.max(hermite::max_abs_above(
                 a0, jerk0, x.accel, x.jerk, hs, peak_a0,
             ));
-            (u0, vel[0], a0, jerk0) = (x.u, x.v, x.accel, x.jerk);
-            e_input += x.input;
+            (u0, vel, a0, jerk0) = (x.u, v_end, x.accel, x.jerk);
+            e_input += x.input + upper_work;
             e_viscous += x.viscous;
             t0 = t1;
             piece.i += 1;
@@ -199,15 +217,19 @@ impl Simulator {
         }
 
         if taken > 0 {
-            super::move_bodies(&mut self.u, &mut self.v, d, self.sys.n, u0, &shift, &vel);
-            for mv in moving {
-                self.e_friction[mv.j] += e_friction[mv.j];
+            let (mut shift_all, mut vel_all) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
+            shift_all[..NC].copy_from_slice(&shift);
+            vel_all[..NC].copy_from_slice(&vel);
+            let n = self.sys.n;
+            super::move_bodies(&mut self.u, &mut self.v, d, n, u0, &shift_all, &vel_all);
+            for m in 0..NC - 1 {
+                self.e_friction[iface[m]] += e_friction[m];
+                self.peak_slip[iface[m]] = peak_slip[m];
             }
             self.e_input += e_input;
             self.e_viscous += e_viscous;
             self.peak_u0 = peak_u0;
             self.peak_a0 = peak_a0;
-            self.peak_slip = peak_slip;
             self.t = t0;
             self.stats.steps += taken;
         }
@@ -215,45 +237,36 @@ impl Simulator {
     }
 }
 
-/// Guard `g` at a step end where the structure's absolute acceleration is
-/// `a1` and `step[c][1]` is the velocity of cluster c.
-#[inline]
-fn guard_at_end(g: &Guard, a1: f64, step: &[[f64; 3]; MAX_BODIES]) -> f64 {
-    match *g {
+/// Whether a stuck guard among `guards` is negative at a step end where the
+/// structure's absolute acceleration is `a1`: `|mass_above a1 + f_top| >
+/// cap`, as the general path evaluates it.
+fn any_stuck_guard_fires(guards: &[Guard], a1: f64) -> bool {
+    guards.iter().any(|g| match *g {
         Guard::Stuck {
             mass_above,
             f_top,
             cap,
-        } => cap - (mass_above * a1 + f_top).abs(),
-        Guard::Slip { hi, lo, sign } => sign * (step[hi][1] - step[lo][1]),
-    }
-}
-
-/// Whether a guard of a one-cluster mode is negative at a step end where
-/// the structure's absolute acceleration is `a1`.
-fn any_stuck_guard_fires(guards: &[Guard], a1: f64) -> bool {
-    let step = [[0.0; 3]; MAX_BODIES]; // one cluster: no slip guards
-    guards.iter().any(|g| guard_at_end(g, a1, &step) < 0.0)
+        } => cap - (mass_above * a1 + f_top).abs() < 0.0,
+        Guard::Slip { .. } => false,
+    })
 }
 
 /// A band of the structure's absolute acceleration inside which every
 /// stuck guard of `guards` is positive by a margin far above rounding: the
 /// stick `|mass_above A + f_top| <= cap` solved for A and shrunk by 1e-12
-/// of its scale. Empty when a guard is not a stick.
+/// of its scale.
 fn safe_accel_band(guards: &[Guard]) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
     for g in guards {
-        match *g {
-            Guard::Stuck {
-                mass_above,
-                f_top,
-                cap,
-            } => {
-                let margin = 1e-12 * (cap + f_top.abs()) / mass_above;
-                lo = lo.max((-cap - f_top) / mass_above + margin);
-                hi = hi.min((cap - f_top) / mass_above - margin);
-            }
-            Guard::Slip { .. } => return (f64::INFINITY, f64::NEG_INFINITY),
+        if let Guard::Stuck {
+            mass_above,
+            f_top,
+            cap,
+        } = *g
+        {
+            let margin = 1e-12 * (cap + f_top.abs()) / mass_above;
+            lo = lo.max((-cap - f_top) / mass_above + margin);
+            hi = hi.min((cap - f_top) / mass_above - margin);
         }
     }
     (lo, hi)
@@ -322,7 +335,7 @@ impl<'a> Stepping<'a> {
 
     /// The structure's cluster after a substep of length `hs` from (u, v)
     /// at `t0`.
-    #[inline]
+    #[inline(always)]
     fn step(&self, piece: &Piece, t0: f64, hs: f64, u: f64, v: f64) -> StepEnd {
         self.map.step(&self.forced, t0 - piece.t_ref, hs, u, v)
     }
@@ -435,7 +448,7 @@ impl Rk4Map {
     /// `self.h` except on a piece's last substep, where it differs by
     /// rounding of the piece's end times (at most [`SAME_STEP`] relative):
     /// that rest is carried to first order with the rates at the end.
-    #[inline]
+    #[inline(always)]
     fn step(&self, forced: &Forced, tau: f64, hs: f64, u: f64, v: f64) -> StepEnd {
         let (force, _) = self.input_force(forced, tau);
         let f0 = (self.slip_load + force) * self.inv_mass;
