@@ -356,9 +356,10 @@ fn upper_cluster_step(v: f64, accel: f64, mass: f64, ag0: f64, ag_rate: f64, h: 
     let rel = accel - ag0;
     let vm = v + 0.5 * h * rel - 0.125 * h * h * ag_rate;
     let v_end = v + h * rel - 0.5 * h * h * ag_rate;
-    let du = h * (v + h * (0.5 * rel - h * ag_rate / 6.0));
+    const SIXTH: f64 = 1.0 / 6.0;
+    let du = h * (v + h * (0.5 * rel - h * ag_rate * SIXTH));
     let (agm, ag1) = (ag0 + 0.5 * h * ag_rate, ag0 + h * ag_rate);
-    let work = -mass * h / 6.0 * (ag0 * v + 4.0 * agm * vm + ag1 * v_end);
+    let work = -mass * h * SIXTH * (ag0 * v + 4.0 * agm * vm + ag1 * v_end);
     [du, v_end, work]
 }
 
@@ -752,14 +753,7 @@ impl Simulator {
                 let (vrel0, vrel1) = (self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]);
                 self.e_friction[j] -= d.slip_force[j] * increment;
                 let peak = &mut self.peak_slip[j];
-                *peak = peak.max(hermite::max_abs_above(
-                    slip0,
-                    vrel0,
-                    slip0 + increment,
-                    vrel1,
-                    h,
-                    *peak,
-                ));
+                hermite::raise_peak(peak, slip0, vrel0, slip0 + increment, vrel1, h);
             }
         }
         move_bodies(&mut self.u, &mut self.v, d, n, x1[0], &du, &v_end);
@@ -769,10 +763,8 @@ impl Simulator {
         self.stats.steps += 1;
 
         let (a0_end, jerk_end) = rk.accel_and_jerk(self.t, self.u[0], self.v[0]);
-        let peak = hermite::max_abs_above(u0_start, v0_start, x1[0], x1[1], h, self.peak_u0);
-        self.peak_u0 = self.peak_u0.max(peak);
-        let peak = hermite::max_abs_above(a0_start, jerk_start, a0_end, jerk_end, h, self.peak_a0);
-        self.peak_a0 = self.peak_a0.max(peak);
+        hermite::raise_peak(&mut self.peak_u0, u0_start, v0_start, x1[0], x1[1], h);
+        hermite::raise_peak(&mut self.peak_a0, a0_start, jerk_start, a0_end, jerk_end, h);
     }
 
     fn load0(&self) -> f64 {

@@ -8,16 +8,22 @@ pub fn max_abs(y0: f64, d0: f64, y1: f64, d1: f64, h: f64) -> f64 {
     max_abs_interior(y0, d0, y1, d1, h)
 }
 
-/// Like [`max_abs`], but returns early (with a value <= `floor`) when the
-/// cubic cannot exceed `floor`: the Hermite basis bounds |p| by
-/// max(|y0|, |y1|) + 4/27 h (|d0| + |d1|).
+/// Raises `peak` to the largest |p| of the cubic (as [`max_abs`]) when that
+/// is larger. Returns at once, without solving for the cubic's extrema,
+/// when it cannot exceed `peak`: the Hermite basis bounds |p| by
+/// max(|y0|, |y1|) + 4/27 h (|d0| + |d1|). This test is all that most steps
+/// cost, so it is kept to plain comparisons.
 #[inline(always)]
-pub fn max_abs_above(y0: f64, d0: f64, y1: f64, d1: f64, h: f64, floor: f64) -> f64 {
-    let ends = y0.abs().max(y1.abs());
-    if ends + 4.0 / 27.0 * h * (d0.abs() + d1.abs()) <= floor {
-        return ends;
+pub fn raise_peak(peak: &mut f64, y0: f64, d0: f64, y1: f64, d1: f64, h: f64) {
+    let (a0, a1) = (y0.abs(), y1.abs());
+    let ends = if a0 > a1 { a0 } else { a1 };
+    if ends + 4.0 / 27.0 * h * (d0.abs() + d1.abs()) <= *peak {
+        return;
     }
-    max_abs_interior(y0, d0, y1, d1, h)
+    let largest = max_abs_interior(y0, d0, y1, d1, h);
+    if largest > *peak {
+        *peak = largest;
+    }
 }
 
 /// [`max_abs`] itself, out of line: called on a few steps only.

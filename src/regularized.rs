@@ -199,13 +199,11 @@ impl RegularizedSimulator {
 
     fn track_peaks(&mut self, y0: &[f64; STATE], y1: &[f64; STATE], h: f64, f0: f64, f1: f64) {
         let m = MAX_BODIES;
-        let p = hermite::max_abs_above(y0[0], y0[m], y1[0], y1[m], h, self.peak_u0);
-        self.peak_u0 = self.peak_u0.max(p);
+        hermite::raise_peak(&mut self.peak_u0, y0[0], y0[m], y1[0], y1[m], h);
         for j in 1..=self.sys.n {
             let (s0, s1) = (y0[j] - y0[j - 1], y1[j] - y1[j - 1]);
             let (r0, r1) = (y0[m + j] - y0[m + j - 1], y1[m + j] - y1[m + j - 1]);
-            let p = hermite::max_abs_above(s0, r0, s1, r1, h, self.peak_slip[j]);
-            self.peak_slip[j] = self.peak_slip[j].max(p);
+            hermite::raise_peak(&mut self.peak_slip[j], s0, r0, s1, r1, h);
         }
         // Structure acceleration: sampled at step ends (a baseline).
         let a1 = self.accelerations(y1, f1)[0];

@@ -89,10 +89,8 @@ impl Simulator {
             {
                 break;
             }
-            peak_u0 = peak_u0.max(hermite::max_abs_above(u0, v0, x.u, x.v, hs, peak_u0));
-            peak_a0 = peak_a0.max(hermite::max_abs_above(
-                a0, jerk0, x.accel, x.jerk, hs, peak_a0,
-            ));
+            hermite::raise_peak(&mut peak_u0, u0, v0, x.u, x.v, hs);
+            hermite::raise_peak(&mut peak_a0, a0, jerk0, x.accel, x.jerk, hs);
             (u0, v0, a0, jerk0) = (x.u, x.v, x.accel, x.jerk);
             e_input += x.input;
             e_viscous += x.viscous;
@@ -191,23 +189,14 @@ impl Simulator {
                 let s0 = slip[m];
                 e_friction[m] -= d.slip_force[iface[m]] * increment;
                 let peak = &mut peak_slip[m];
-                *peak = peak.max(hermite::max_abs_above(
-                    s0,
-                    vrel0,
-                    s0 + increment,
-                    vrel1,
-                    hs,
-                    *peak,
-                ));
+                hermite::raise_peak(peak, s0, vrel0, s0 + increment, vrel1, hs);
                 slip[m] = s0 + increment;
             }
             for c in 1..NC {
                 shift[c] += du[c];
             }
-            peak_u0 = peak_u0.max(hermite::max_abs_above(u0, vel[0], x.u, x.v, hs, peak_u0));
-            peak_a0 = peak_a0.max(hermite::max_abs_above(
-                a0, jerk0, x.accel, x.jerk, hs, peak_a0,
-            ));
+            hermite::raise_peak(&mut peak_u0, u0, vel[0], x.u, x.v, hs);
+            hermite::raise_peak(&mut peak_a0, a0, jerk0, x.accel, x.jerk, hs);
             (u0, vel, a0, jerk0) = (x.u, v_end, x.accel, x.jerk);
             e_input += x.input + upper_work;
             e_viscous += x.viscous;
@@ -372,8 +361,9 @@ struct StepEnd {
 /// the stage velocities.
 #[derive(Clone, Copy, Debug)]
 struct Rk4Map {
-    /// Step length.
+    /// Step length, and a sixth of it (RK4's weight).
     h: f64,
+    sixth_h: f64,
     /// Coefficients of (u, v, f0, f1) for u1, v1, V2, V3, V4.
     rows: [[f64; 4]; 5],
     mass: f64,
@@ -406,6 +396,7 @@ impl Rk4Map {
         let rows = std::array::from_fn(|r| columns.map(|column| column[r]));
         Rk4Map {
             h,
+            sixth_h: h / 6.0,
             rows,
             mass: d.mass[0],
             inv_mass: d.inv_mass0,
@@ -460,7 +451,7 @@ impl Rk4Map {
         let h = self.h;
         let force_mid = force + 0.5 * h * forced.force_rate;
         let force_end = force + h * forced.force_rate;
-        let w = h / 6.0;
+        let w = self.sixth_h;
         let mut end = StepEnd {
             u: u1,
             v: v1,
