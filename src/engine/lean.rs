@@ -331,9 +331,8 @@ impl<'a> Stepping<'a> {
 
     /// The structure's absolute acceleration and its rate at `t0`.
     fn accel_and_jerk(&self, piece: &Piece, t0: f64, u: f64, v: f64) -> (f64, f64) {
-        let tau = t0 - piece.t_ref;
-        let (force, ag) = self.map.input_force(&self.forced, tau);
-        self.map.accel_and_jerk(&self.forced, force, ag, u, v)
+        self.map
+            .accel_and_jerk(&self.forced, t0 - piece.t_ref, u, v)
     }
 }
 
@@ -364,12 +363,18 @@ struct Rk4Map {
     /// Step length, and a sixth of it (RK4's weight).
     h: f64,
     sixth_h: f64,
-    /// Coefficients of (u, v, f0, f1) for u1, v1, V2, V3, V4.
-    rows: [[f64; 4]; 5],
+    /// For u1, v1, V2, V3, V4: the coefficients of u, v and the input force
+    /// `fext - m ag` at the step start.
+    rows: [[f64; 3]; 5],
+    /// The same outputs' terms from the slipping interfaces' constant load.
+    load_terms: [f64; 5],
+    /// Their coefficients of `f1`.
+    slope_rows: [f64; 5],
     mass: f64,
     inv_mass: f64,
-    slip_load: f64,
-    /// k / mass and c / mass of the cluster.
+    /// Acceleration of the constant load alone, `slip_load / mass`.
+    load_accel: f64,
+    /// k / mass and c / mass of the cluster, and c.
     w2: f64,
     cm: f64,
     c: f64,
@@ -379,10 +384,16 @@ struct Rk4Map {
 #[derive(Clone, Copy, Debug)]
 struct Forced {
     exc: Excitation,
-    /// `rows[r][3] f1` for each output r.
-    slope_terms: [f64; 5],
-    /// Slope of the input force `fext - m ag` (N/s).
+    /// Input force `fext - m ag` at the piece start (N) and its slope (N/s).
+    force: f64,
     force_rate: f64,
+    /// Its increase over half a step and over a step.
+    half_step_force: f64,
+    step_force: f64,
+    /// Each output's terms from the constant load and the forcing's slope.
+    constant_terms: [f64; 5],
+    /// `fext_rate / mass`, the forcing's part of the jerk.
+    jerk_forced: f64,
 }
 
 impl Rk4Map {
@@ -393,14 +404,18 @@ impl Rk4Map {
             rk4_stages(w2, cm, h, [e(0), e(1), e(2), e(3)])
         };
         let columns = [unit(0), unit(1), unit(2), unit(3)];
-        let rows = std::array::from_fn(|r| columns.map(|column| column[r]));
+        let load_accel = d.slip_load[0] * d.inv_mass0;
         Rk4Map {
             h,
             sixth_h: h / 6.0,
-            rows,
+            rows: std::array::from_fn(|r| {
+                [columns[0][r], columns[1][r], columns[2][r] * d.inv_mass0]
+            }),
+            load_terms: columns[2].map(|f0_coefficient| f0_coefficient * load_accel),
+            slope_rows: columns[3],
             mass: d.mass[0],
             inv_mass: d.inv_mass0,
-            slip_load: d.slip_load[0],
+            load_accel,
             w2,
             cm,
             c: sys.c,
@@ -412,26 +427,35 @@ impl Rk4Map {
         let f1 = force_rate * self.inv_mass;
         Forced {
             exc: *exc,
-            slope_terms: self.rows.map(|row| row[3] * f1),
+            force: exc.fext - self.mass * exc.ag,
             force_rate,
+            half_step_force: 0.5 * self.h * force_rate,
+            step_force: self.h * force_rate,
+            constant_terms: std::array::from_fn(|r| self.load_terms[r] + self.slope_rows[r] * f1),
+            jerk_forced: exc.fext_rate * self.inv_mass,
         }
     }
 
-    /// The input force `fext - m ag` on the cluster and `ag` at `tau` into
-    /// the piece.
-    #[inline]
-    fn input_force(&self, forced: &Forced, tau: f64) -> (f64, f64) {
-        let exc = &forced.exc;
-        let ag = exc.ag + exc.ag_rate * tau;
-        (exc.fext + exc.fext_rate * tau - self.mass * ag, ag)
+    /// Absolute acceleration and its rate at `tau` into the piece, from a
+    /// state (u, v).
+    fn accel_and_jerk(&self, forced: &Forced, tau: f64, u: f64, v: f64) -> (f64, f64) {
+        let force = forced.force + forced.force_rate * tau;
+        let ag = forced.exc.ag + forced.exc.ag_rate * tau;
+        self.accel_and_jerk_at(forced, force, ag, u, v)
     }
 
-    /// Absolute acceleration and its rate at a state, where the input force
-    /// is `force` and the ground acceleration `ag`.
-    #[inline]
-    fn accel_and_jerk(&self, forced: &Forced, force: f64, ag: f64, u: f64, v: f64) -> (f64, f64) {
-        let relative = (self.slip_load + force) * self.inv_mass - self.w2 * u - self.cm * v;
-        let jerk = forced.exc.fext_rate * self.inv_mass - self.w2 * v - self.cm * relative;
+    /// The same where the input force is `force` and the ground acceleration `ag`.
+    #[inline(always)]
+    fn accel_and_jerk_at(
+        &self,
+        forced: &Forced,
+        force: f64,
+        ag: f64,
+        u: f64,
+        v: f64,
+    ) -> (f64, f64) {
+        let relative = force * self.inv_mass + self.load_accel - self.w2 * u - self.cm * v;
+        let jerk = forced.jerk_forced - self.w2 * v - self.cm * relative;
         (relative + ag, jerk)
     }
 
@@ -441,35 +465,32 @@ impl Rk4Map {
     /// that rest is carried to first order with the rates at the end.
     #[inline(always)]
     fn step(&self, forced: &Forced, tau: f64, hs: f64, u: f64, v: f64) -> StepEnd {
-        let (force, _) = self.input_force(forced, tau);
-        let f0 = (self.slip_load + force) * self.inv_mass;
+        let force = forced.force + forced.force_rate * tau;
         let out = |r: usize| {
             let row = &self.rows[r];
-            row[0] * u + row[1] * v + row[2] * f0 + forced.slope_terms[r]
+            row[0] * u + row[1] * v + row[2] * force + forced.constant_terms[r]
         };
         let (u1, v1, v2, v3, v4) = (out(0), out(1), out(2), out(3), out(4));
-        let h = self.h;
-        let force_mid = force + 0.5 * h * forced.force_rate;
-        let force_end = force + h * forced.force_rate;
+        let force_mid = force + forced.half_step_force;
+        let force_end = force + forced.step_force;
         let w = self.sixth_h;
+        let ag_end = forced.exc.ag + forced.exc.ag_rate * (tau + self.h);
+        let (accel, jerk) = self.accel_and_jerk_at(forced, force_end, ag_end, u1, v1);
         let mut end = StepEnd {
             u: u1,
             v: v1,
             input: w * (force * v + 2.0 * force_mid * (v2 + v3) + force_end * v4),
             viscous: w * self.c * (v * v + 2.0 * (v2 * v2 + v3 * v3) + v4 * v4),
-            accel: 0.0,
-            jerk: 0.0,
+            accel,
+            jerk,
         };
-        let ag_end = forced.exc.ag + forced.exc.ag_rate * (tau + h);
-        (end.accel, end.jerk) = self.accel_and_jerk(forced, force_end, ag_end, u1, v1);
-        if hs != h {
-            let delta = hs - h;
-            let relative = end.accel - ag_end;
+        if hs != self.h {
+            let delta = hs - self.h;
             end.u += delta * v1;
-            end.v += delta * relative;
+            end.v += delta * (accel - ag_end);
             end.input += delta * force_end * v1;
             end.viscous += delta * self.c * v1 * v1;
-            end.accel += delta * end.jerk;
+            end.accel += delta * jerk;
         }
         end
     }
