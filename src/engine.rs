@@ -1111,6 +1111,20 @@ mod tests {
     use super::*;
 
     #[test]
+    fn substeps_round_up_but_not_past_rounding() {
+        // Expected: ceil(length / h_max), with ratios within 1e-9 of an
+        // integer taken as that integer, and at least one step.
+        assert_eq!(substeps(0.005, 0.00125), 4.0);
+        assert_eq!(substeps(0.005 * (1.0 + 1e-12), 0.00125), 4.0);
+        assert_eq!(substeps(0.005 * (1.0 + 1e-6), 0.00125), 5.0);
+        assert_eq!(substeps(0.0049, 0.00125), 4.0);
+        assert_eq!(substeps(1e-9, 0.00125), 1.0);
+        assert_eq!(substeps(7.3, 0.01), 730.0);
+        // Beyond 2^52 every value is an integer: the same rule, by `ceil`.
+        assert_eq!(substeps(1e10, 1e-8), (1e18 * (1.0 - 1e-9f64)).ceil());
+    }
+
+    #[test]
     fn bad_inputs_are_rejected_by_name_and_leave_the_state_alone() {
         let mut sim = Simulator::new(&Params::default(), &Settings::default()).unwrap();
         let nan_ag = Excitation {

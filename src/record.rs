@@ -385,4 +385,46 @@ mod tests {
         assert_eq!((e.line, e.file.as_str()), (2, "y.csv"));
         assert_eq!(parse_csv("0,1\n0,2\n", "z").unwrap_err().line, 2);
     }
+
+    /// Collects the pieces it is given.
+    struct Recorder {
+        t: f64,
+        pieces: Vec<(f64, f64, f64)>,
+    }
+
+    impl crate::solver::Stepper for Recorder {
+        fn time(&self) -> f64 {
+            self.t
+        }
+        fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
+            self.pieces.push((t_end, exc.ag, exc.ag_rate));
+            self.t = t_end;
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_record_is_fed_piece_by_piece_as_piece_at_gives_it() {
+        // Expected values: `piece_at` (the lookup from scratch) at each
+        // piece's start, from a start between samples to an end past them.
+        let gm = GroundMotion {
+            time: vec![0.0, 0.1, 0.25, 0.3, 0.5],
+            accel: vec![1.0, -2.0, 0.5, 4.0, 0.0],
+        };
+        let mut rec = Recorder {
+            t: 0.05,
+            pieces: Vec::new(),
+        };
+        advance_with_record(&mut rec, 0.7, &gm, 2.0, &Excitation::default()).unwrap();
+        let mut t = 0.05;
+        let mut expected = Vec::new();
+        while t < 0.7 {
+            let (a, slope, end) = gm.piece_at(t);
+            let end = end.min(0.7);
+            expected.push((end, 2.0 * a, 2.0 * slope));
+            t = end;
+        }
+        assert_eq!(rec.pieces, expected);
+        assert_eq!(rec.pieces.len(), 5);
+    }
 }

@@ -149,6 +149,7 @@ impl Simulator {
         let (mut e_input, mut e_viscous) = (0.0, 0.0);
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let (mut a0, mut jerk0) = st.accel_and_jerk(piece, t0, u0, vel[0]);
+        let mut upper = UpperClusters::<NC>::new(d, st.map.h, piece.exc.ag_rate);
         let mut taken = 0u64;
         let mut pending = None;
         'steps: loop {
@@ -157,6 +158,7 @@ impl Simulator {
                     break;
                 }
                 (a0, jerk0) = st.accel_and_jerk(piece, t0, u0, vel[0]);
+                upper = UpperClusters::new(d, st.map.h, piece.exc.ag_rate);
                 continue;
             }
             let exc = &piece.exc;
@@ -166,13 +168,7 @@ impl Simulator {
             // Per cluster over the step: displacement increment, end velocity.
             let (mut du, mut v_end) = ([0.0; NC], [0.0; NC]);
             (du[0], v_end[0]) = (x.u - u0, x.v);
-            let mut upper_work = 0.0;
-            for c in 1..NC {
-                let [dc, vc, work] =
-                    upper_cluster_step(vel[c], d.accel_const[c], d.mass[c], ag0, exc.ag_rate, hs);
-                (du[c], v_end[c]) = (dc, vc);
-                upper_work += work;
-            }
+            let upper_work = upper.step(&vel, ag0, hs, &mut du, &mut v_end);
             if !(x.accel >= band_lo && x.accel <= band_hi) && any_stuck_guard_fires(guards, x.accel)
             {
                 break;
@@ -223,6 +219,81 @@ impl Simulator {
             self.stats.steps += taken;
         }
         pending
+    }
+}
+
+/// The clusters above the structure's over the substeps of one piece: the
+/// exact polynomials in time that RK4 gives them ([`upper_cluster_step`]),
+/// with the terms that are constant over the piece collected once.
+struct UpperClusters<const NC: usize> {
+    h: f64,
+    half_h: f64,
+    ag_rate: f64,
+    /// Per cluster: absolute acceleration and mass (for a step of another
+    /// length), `mass h / 6`, and the constant parts of the velocity
+    /// change, the displacement and the mid-step velocity.
+    accel: [f64; NC],
+    mass: [f64; NC],
+    mass_sixth_h: [f64; NC],
+    dv: [f64; NC],
+    du: [f64; NC],
+    vm: [f64; NC],
+}
+
+impl<const NC: usize> UpperClusters<NC> {
+    fn new(d: &Dynamics, h: f64, ag_rate: f64) -> Self {
+        let accel: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
+        let (h2, h3) = (h * h, h * h * h);
+        UpperClusters {
+            h,
+            half_h: 0.5 * h,
+            ag_rate,
+            accel,
+            mass: std::array::from_fn(|c| d.mass[c]),
+            mass_sixth_h: std::array::from_fn(|c| d.mass[c] * h / 6.0),
+            dv: accel.map(|a| h * a - 0.5 * h2 * ag_rate),
+            du: accel.map(|a| 0.5 * h2 * a - h3 * ag_rate / 6.0),
+            vm: accel.map(|a| 0.5 * h * a - 0.125 * h2 * ag_rate),
+        }
+    }
+
+    /// Clusters 1.. over a substep of length `hs` from velocities `vel`,
+    /// where the ground acceleration starts at `ag0`: their displacement
+    /// increments and end velocities into `du` and `v_end`; returns their
+    /// input work.
+    #[inline(always)]
+    fn step(
+        &self,
+        vel: &[f64; NC],
+        ag0: f64,
+        hs: f64,
+        du: &mut [f64; NC],
+        v_end: &mut [f64; NC],
+    ) -> f64 {
+        let mut work = 0.0;
+        if hs != self.h {
+            // A piece's last substep, longer or shorter by rounding.
+            for c in 1..NC {
+                let [dc, vc, w] =
+                    upper_cluster_step(vel[c], self.accel[c], self.mass[c], ag0, self.ag_rate, hs);
+                (du[c], v_end[c]) = (dc, vc);
+                work += w;
+            }
+            return work;
+        }
+        let h_ag = self.h * ag0;
+        let half_h2_ag = self.half_h * h_ag;
+        let ag_mid = ag0 + self.half_h * self.ag_rate;
+        let ag_end = ag0 + self.h * self.ag_rate;
+        for c in 1..NC {
+            let v = vel[c];
+            let ve = v - h_ag + self.dv[c];
+            let vm = v - 0.5 * h_ag + self.vm[c];
+            du[c] = self.h * v - half_h2_ag + self.du[c];
+            v_end[c] = ve;
+            work -= self.mass_sixth_h[c] * (ag0 * v + 4.0 * ag_mid * vm + ag_end * ve);
+        }
+        work
     }
 }
 
@@ -491,6 +562,8 @@ impl Rk4Map {
             end.input += delta * force_end * v1;
             end.viscous += delta * self.c * v1 * v1;
             end.accel += delta * jerk;
+            let relative_jerk = jerk - forced.exc.ag_rate;
+            end.jerk -= delta * (self.w2 * (accel - ag_end) + self.cm * relative_jerk);
         }
         end
     }
@@ -515,4 +588,102 @@ fn rk4_stages(w2: f64, cm: f64, h: f64, [u, v, f0, f1]: [f64; 4]) -> [f64; 5] {
         v3,
         v4,
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::StructureRk4;
+    use crate::mode::{Contact, Mode};
+    use crate::params::Params;
+
+    /// A 2-block scene with block 1 sliding forward on the structure, so
+    /// that the structure's cluster carries a constant friction load.
+    fn sliding_scene() -> (System, Dynamics) {
+        let sys = System::new(&Params::default()).unwrap();
+        let mut mode = Mode::all_stuck(&sys);
+        mode.contact[1] = Contact::SlipForward;
+        let d = Dynamics::new(&sys, &mode);
+        assert!(d.slip_load[0] != 0.0 && d.n_clusters == 2);
+        (sys, d)
+    }
+
+    fn close(a: f64, b: f64, scale: f64) -> bool {
+        (a - b).abs() <= 1e-13 * scale
+    }
+
+    #[test]
+    fn the_affine_map_is_the_rk4_step() {
+        // Expected values: the stage-by-stage RK4 of the general path.
+        let (sys, d) = sliding_scene();
+        let exc = Excitation {
+            ag: 2.5,
+            ag_rate: -40.0,
+            fext: 300.0,
+            fext_rate: 5e3,
+        };
+        let (t_ref, h) = (0.3, 1.25e-3);
+        let rk = StructureRk4::new(&sys, &d, &exc, t_ref);
+        let map = Rk4Map::new(&sys, &d, h);
+        let forced = map.forced(&exc);
+        for (k, (u, v)) in [(0.0, 0.0), (0.012, -0.3), (-0.04, 0.7)]
+            .into_iter()
+            .enumerate()
+        {
+            let t0 = t_ref + k as f64 * h;
+            // Whole steps, and a last substep longer by rounding-sized rests.
+            for hs in [h, h * (1.0 + 1e-12), h * (1.0 - 4e-10)] {
+                let want = rk.step(t0, u, v, hs);
+                let (a1, jerk1) = rk.accel_and_jerk(t0 + hs, want[0], want[1]);
+                let got = map.step(&forced, t0 - t_ref, hs, u, v);
+                assert!(close(got.u, want[0], 0.1), "u {} {}", got.u, want[0]);
+                assert!(close(got.v, want[1], 1.0), "v {} {}", got.v, want[1]);
+                assert!(
+                    close(got.input, want[2], 10.0),
+                    "input {} {}",
+                    got.input,
+                    want[2]
+                );
+                assert!(close(got.viscous, want[3], 10.0));
+                assert!(close(got.accel, a1, 10.0), "accel {} {a1}", got.accel);
+                assert!(close(got.jerk, jerk1, 1e3), "jerk {} {jerk1}", got.jerk);
+            }
+            let (a0, jerk0) = rk.accel_and_jerk(t0, u, v);
+            let (a, jerk) = map.accel_and_jerk(&forced, t0 - t_ref, u, v);
+            assert!(close(a, a0, 10.0) && close(jerk, jerk0, 1e3));
+        }
+    }
+
+    #[test]
+    fn upper_clusters_move_as_their_exact_polynomials() {
+        // Expected values: `upper_cluster_step`, the closed form the general
+        // path uses.
+        let (_, d) = sliding_scene();
+        let (h, ag_rate, ag0) = (1.25e-3, 75.0, -1.2);
+        let upper = UpperClusters::<2>::new(&d, h, ag_rate);
+        let vel = [0.1, -0.25];
+        for hs in [h, h * (1.0 + 1e-12)] {
+            let (mut du, mut v_end) = ([0.0; 2], [0.0; 2]);
+            let work = upper.step(&vel, ag0, hs, &mut du, &mut v_end);
+            let [du1, v1, w1] =
+                upper_cluster_step(vel[1], d.accel_const[1], d.mass[1], ag0, ag_rate, hs);
+            assert!(close(du[1], du1, 1e-3) && close(v_end[1], v1, 1.0));
+            assert!(close(work, w1, 10.0), "{work} {w1}");
+        }
+    }
+
+    #[test]
+    fn the_stick_band_is_inside_every_stick() {
+        // Expected: at the band's edges every stuck guard is still positive,
+        // and just beyond them (1e-9 relative) one is negative.
+        let sys = System::new(&Params::default()).unwrap();
+        let d = Dynamics::new(&sys, &Mode::all_stuck(&sys));
+        let guards = &d.guards[..d.n_guards];
+        assert_eq!(guards.len(), 2);
+        let (lo, hi) = safe_accel_band(guards);
+        assert!(lo < 0.0 && hi > 0.0);
+        assert!(!any_stuck_guard_fires(guards, lo) && !any_stuck_guard_fires(guards, hi));
+        assert!(any_stuck_guard_fires(guards, hi * (1.0 + 1e-9)));
+        assert!(any_stuck_guard_fires(guards, lo * (1.0 + 1e-9)));
+    }
 }
