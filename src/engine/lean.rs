@@ -70,7 +70,7 @@ impl Simulator {
         let (mut u0, mut v0, mut t0) = (self.u[0], self.v[0], self.t);
         let (mut e_input, mut e_viscous) = (0.0, 0.0);
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
-        let (mut a0, mut jerk0) = st.accel_and_jerk(piece, t0, u0, v0);
+        let (mut inputs, mut a0, mut jerk0) = st.start(piece, t0, u0, v0);
         let mut taken = 0u64;
         let mut pending = None;
         loop {
@@ -78,11 +78,11 @@ impl Simulator {
                 if !st.next_piece(piece, pieces, t0, &mut pending) {
                     break;
                 }
-                (a0, jerk0) = st.accel_and_jerk(piece, t0, u0, v0);
+                (inputs, a0, jerk0) = st.start(piece, t0, u0, v0);
                 continue;
             }
             let (t1, hs) = st.substep(piece, t0);
-            let x = st.step(piece, t0, hs, u0, v0);
+            let x = st.step(inputs, hs, u0, v0);
             // Inside the band no stick can break; near or outside it the
             // guards decide exactly as on the general path.
             if !(x.accel >= band_lo && x.accel <= band_hi) && any_stuck_guard_fires(guards, x.accel)
@@ -91,7 +91,7 @@ impl Simulator {
             }
             hermite::raise_peak(&mut peak_u0, u0, v0, x.u, x.v, hs);
             hermite::raise_peak(&mut peak_a0, a0, jerk0, x.accel, x.jerk, hs);
-            (u0, v0, a0, jerk0) = (x.u, x.v, x.accel, x.jerk);
+            (u0, v0, a0, jerk0, inputs) = (x.u, x.v, x.accel, x.jerk, x.inputs);
             e_input += x.input;
             e_viscous += x.viscous;
             t0 = t1;
@@ -148,7 +148,7 @@ impl Simulator {
         let (mut u0, mut t0) = (self.u[0], self.t);
         let (mut e_input, mut e_viscous) = (0.0, 0.0);
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
-        let (mut a0, mut jerk0) = st.accel_and_jerk(piece, t0, u0, vel[0]);
+        let (mut inputs, mut a0, mut jerk0) = st.start(piece, t0, u0, vel[0]);
         let mut upper = UpperClusters::<NC>::new(d, st.map.h, piece.exc.ag_rate);
         let mut taken = 0u64;
         let mut pending = None;
@@ -157,14 +157,13 @@ impl Simulator {
                 if !st.next_piece(piece, pieces, t0, &mut pending) {
                     break;
                 }
-                (a0, jerk0) = st.accel_and_jerk(piece, t0, u0, vel[0]);
+                (inputs, a0, jerk0) = st.start(piece, t0, u0, vel[0]);
                 upper = UpperClusters::new(d, st.map.h, piece.exc.ag_rate);
                 continue;
             }
-            let exc = &piece.exc;
             let (t1, hs) = st.substep(piece, t0);
-            let x = st.step(piece, t0, hs, u0, vel[0]);
-            let ag0 = exc.ag + exc.ag_rate * (t0 - piece.t_ref);
+            let x = st.step(inputs, hs, u0, vel[0]);
+            let ag0 = inputs.ag;
             // Per cluster over the step: displacement increment, end velocity.
             let (mut du, mut v_end) = ([0.0; NC], [0.0; NC]);
             (du[0], v_end[0]) = (x.u - u0, x.v);
@@ -193,7 +192,7 @@ impl Simulator {
             }
             hermite::raise_peak(&mut peak_u0, u0, vel[0], x.u, x.v, hs);
             hermite::raise_peak(&mut peak_a0, a0, jerk0, x.accel, x.jerk, hs);
-            (u0, vel, a0, jerk0) = (x.u, v_end, x.accel, x.jerk);
+            (u0, vel, a0, jerk0, inputs) = (x.u, v_end, x.accel, x.jerk, x.inputs);
             e_input += x.input + upper_work;
             e_viscous += x.viscous;
             t0 = t1;
@@ -393,17 +392,21 @@ impl<'a> Stepping<'a> {
         }
     }
 
-    /// The structure's cluster after a substep of length `hs` from (u, v)
-    /// at `t0`.
+    /// The structure's cluster after a substep of length `hs` from (u, v),
+    /// where the inputs are `start`.
     #[inline(always)]
-    fn step(&self, piece: &Piece, t0: f64, hs: f64, u: f64, v: f64) -> StepEnd {
-        self.map.step(&self.forced, t0 - piece.t_ref, hs, u, v)
+    fn step(&self, start: Inputs, hs: f64, u: f64, v: f64) -> StepEnd {
+        self.map.step(&self.forced, start, hs, u, v)
     }
 
-    /// The structure's absolute acceleration and its rate at `t0`.
-    fn accel_and_jerk(&self, piece: &Piece, t0: f64, u: f64, v: f64) -> (f64, f64) {
-        self.map
-            .accel_and_jerk(&self.forced, t0 - piece.t_ref, u, v)
+    /// The inputs at `t0`, and the structure's absolute acceleration and its
+    /// rate there.
+    fn start(&self, piece: &Piece, t0: f64, u: f64, v: f64) -> (Inputs, f64, f64) {
+        let inputs = self.map.inputs(&self.forced, t0 - piece.t_ref);
+        let (a, jerk) = self
+            .map
+            .accel_and_jerk_at(&self.forced, inputs.force, inputs.ag, u, v);
+        (inputs, a, jerk)
     }
 }
 
@@ -418,6 +421,16 @@ struct StepEnd {
     /// Absolute acceleration and its time derivative.
     accel: f64,
     jerk: f64,
+    /// The inputs at the end (at the step's nominal length).
+    inputs: Inputs,
+}
+
+/// The input force `fext - m ag` on the structure's cluster (N) and the
+/// ground acceleration (m/s^2) at an instant: carried from step to step.
+#[derive(Clone, Copy, Debug)]
+struct Inputs {
+    force: f64,
+    ag: f64,
 }
 
 /// RK4's step for the structure's cluster as the affine map that it is for
@@ -434,7 +447,7 @@ struct Rk4Map {
     /// Step length, and a sixth of it (RK4's weight).
     h: f64,
     sixth_h: f64,
-    /// For u1, v1, V2, V3, V4: the coefficients of u, v and the input force
+    /// For u1 - u, v1, V2, V3, V4: the coefficients of u, v and the input force
     /// `fext - m ag` at the step start.
     rows: [[f64; 3]; 5],
     /// The same outputs' terms from the slipping interfaces' constant load.
@@ -458,9 +471,11 @@ struct Forced {
     /// Input force `fext - m ag` at the piece start (N) and its slope (N/s).
     force: f64,
     force_rate: f64,
-    /// Its increase over half a step and over a step.
-    half_step_force: f64,
+    /// Its increase over a step, and that of `ag`.
     step_force: f64,
+    step_ag: f64,
+    /// RK4's weight of the force's slope in the input work: `h^2 / 6` times it.
+    input_slope: f64,
     /// Each output's terms from the constant load and the forcing's slope.
     constant_terms: [f64; 5],
     /// `fext_rate / mass`, the forcing's part of the jerk.
@@ -500,19 +515,20 @@ impl Rk4Map {
             exc: *exc,
             force: exc.fext - self.mass * exc.ag,
             force_rate,
-            half_step_force: 0.5 * self.h * force_rate,
             step_force: self.h * force_rate,
+            step_ag: self.h * exc.ag_rate,
+            input_slope: self.sixth_h * self.h * force_rate,
             constant_terms: std::array::from_fn(|r| self.load_terms[r] + self.slope_rows[r] * f1),
             jerk_forced: exc.fext_rate * self.inv_mass,
         }
     }
 
-    /// Absolute acceleration and its rate at `tau` into the piece, from a
-    /// state (u, v).
-    fn accel_and_jerk(&self, forced: &Forced, tau: f64, u: f64, v: f64) -> (f64, f64) {
-        let force = forced.force + forced.force_rate * tau;
-        let ag = forced.exc.ag + forced.exc.ag_rate * tau;
-        self.accel_and_jerk_at(forced, force, ag, u, v)
+    /// The inputs at `tau` into the piece.
+    fn inputs(&self, forced: &Forced, tau: f64) -> Inputs {
+        Inputs {
+            force: forced.force + forced.force_rate * tau,
+            ag: forced.exc.ag + forced.exc.ag_rate * tau,
+        }
     }
 
     /// The same where the input force is `force` and the ground acceleration `ag`.
@@ -530,30 +546,35 @@ impl Rk4Map {
         (relative + ag, jerk)
     }
 
-    /// One step of length `hs` from (u, v) at `tau` into the piece. `hs` is
+    /// One step of length `hs` from (u, v) where the inputs are `start`. `hs` is
     /// `self.h` except on a piece's last substep, where it differs by
     /// rounding of the piece's end times (at most [`SAME_STEP`] relative):
     /// that rest is carried to first order with the rates at the end.
     #[inline(always)]
-    fn step(&self, forced: &Forced, tau: f64, hs: f64, u: f64, v: f64) -> StepEnd {
-        let force = forced.force + forced.force_rate * tau;
+    fn step(&self, forced: &Forced, start: Inputs, hs: f64, u: f64, v: f64) -> StepEnd {
+        let force = start.force;
         let out = |r: usize| {
             let row = &self.rows[r];
             row[0] * u + row[1] * v + row[2] * force + forced.constant_terms[r]
         };
-        let (u1, v1, v2, v3, v4) = (out(0), out(1), out(2), out(3), out(4));
-        let force_mid = force + forced.half_step_force;
-        let force_end = force + forced.step_force;
-        let w = self.sixth_h;
-        let ag_end = forced.exc.ag + forced.exc.ag_rate * (tau + self.h);
+        let (du, v1, v2, v3, v4) = (out(0), out(1), out(2), out(3), out(4));
+        let u1 = u + du;
+        let inputs = Inputs {
+            force: force + forced.step_force,
+            ag: start.ag + forced.step_ag,
+        };
+        let (force_end, ag_end) = (inputs.force, inputs.ag);
         let (accel, jerk) = self.accel_and_jerk_at(forced, force_end, ag_end, u1, v1);
         let mut end = StepEnd {
             u: u1,
             v: v1,
-            input: w * (force * v + 2.0 * force_mid * (v2 + v3) + force_end * v4),
-            viscous: w * self.c * (v * v + 2.0 * (v2 * v2 + v3 * v3) + v4 * v4),
+            // RK4's quadrature of (force v): with the force linear over the
+            // step, `force du` plus the slope's share over the stages.
+            input: force * du + forced.input_slope * (v2 + v3 + v4),
+            viscous: self.sixth_h * self.c * (v * v + 2.0 * (v2 * v2 + v3 * v3) + v4 * v4),
             accel,
             jerk,
+            inputs,
         };
         if hs != self.h {
             let delta = hs - self.h;
@@ -570,7 +591,7 @@ impl Rk4Map {
 }
 
 /// RK4's stages for u' = v, v' = f0 + f1 τ - w2 u - cm v over one step `h`
-/// from `[u, v, f0, f1]`: (u1, v1, V2, V3, V4), linear in the four inputs.
+/// from `[u, v, f0, f1]`: (u1 - u, v1, V2, V3, V4), linear in the four inputs.
 fn rk4_stages(w2: f64, cm: f64, h: f64, [u, v, f0, f1]: [f64; 4]) -> [f64; 5] {
     let accel = |tau: f64, u: f64, v: f64| f0 + f1 * tau - w2 * u - cm * v;
     let a1 = accel(0.0, u, v);
@@ -582,7 +603,7 @@ fn rk4_stages(w2: f64, cm: f64, h: f64, [u, v, f0, f1]: [f64; 4]) -> [f64; 5] {
     let a4 = accel(h, u4, v4);
     let w = h / 6.0;
     [
-        u + w * (v + 2.0 * (v2 + v3) + v4),
+        w * (v + 2.0 * (v2 + v3) + v4),
         v + w * (a1 + 2.0 * (a2 + a3) + a4),
         v2,
         v3,
@@ -635,7 +656,7 @@ mod tests {
             for hs in [h, h * (1.0 + 1e-12), h * (1.0 - 4e-10)] {
                 let want = rk.step(t0, u, v, hs);
                 let (a1, jerk1) = rk.accel_and_jerk(t0 + hs, want[0], want[1]);
-                let got = map.step(&forced, t0 - t_ref, hs, u, v);
+                let got = map.step(&forced, map.inputs(&forced, t0 - t_ref), hs, u, v);
                 assert!(close(got.u, want[0], 0.1), "u {} {}", got.u, want[0]);
                 assert!(close(got.v, want[1], 1.0), "v {} {}", got.v, want[1]);
                 assert!(
@@ -649,7 +670,8 @@ mod tests {
                 assert!(close(got.jerk, jerk1, 1e3), "jerk {} {jerk1}", got.jerk);
             }
             let (a0, jerk0) = rk.accel_and_jerk(t0, u, v);
-            let (a, jerk) = map.accel_and_jerk(&forced, t0 - t_ref, u, v);
+            let start = map.inputs(&forced, t0 - t_ref);
+            let (a, jerk) = map.accel_and_jerk_at(&forced, start.force, start.ag, u, v);
             assert!(close(a, a0, 10.0) && close(jerk, jerk0, 1e3));
         }
     }
