@@ -82,7 +82,7 @@ impl Simulator {
                 continue;
             }
             let (t1, hs) = st.substep(piece, t0);
-            let x = st.step(inputs, hs, u0, v0);
+            let x = st.step(inputs, a0, hs, u0, v0);
             // Inside the band no stick can break; near or outside it the
             // guards decide exactly as on the general path.
             if !(x.accel >= band_lo && x.accel <= band_hi) && any_stuck_guard_fires(guards, x.accel)
@@ -162,7 +162,7 @@ impl Simulator {
                 continue;
             }
             let (t1, hs) = st.substep(piece, t0);
-            let x = st.step(inputs, hs, u0, vel[0]);
+            let x = st.step(inputs, a0, hs, u0, vel[0]);
             let ag0 = inputs.ag;
             // Per cluster over the step: displacement increment, end velocity.
             let (mut du, mut v_end) = ([0.0; NC], [0.0; NC]);
@@ -393,10 +393,10 @@ impl<'a> Stepping<'a> {
     }
 
     /// The structure's cluster after a substep of length `hs` from (u, v),
-    /// where the inputs are `start`.
+    /// where the inputs are `start` and the absolute acceleration `accel`.
     #[inline(always)]
-    fn step(&self, start: Inputs, hs: f64, u: f64, v: f64) -> StepEnd {
-        self.map.step(&self.forced, start, hs, u, v)
+    fn step(&self, start: Inputs, accel: f64, hs: f64, u: f64, v: f64) -> StepEnd {
+        self.map.step(&self.forced, start, accel, hs, u, v)
     }
 
     /// The inputs at `t0`, and the structure's absolute acceleration and its
@@ -444,10 +444,13 @@ struct Inputs {
 /// the stage velocities.
 #[derive(Clone, Copy, Debug)]
 struct Rk4Map {
-    /// Step length, and a sixth of it (RK4's weight).
+    /// Step length, half and a sixth of it (RK4's weights).
     h: f64,
+    half_h: f64,
     sixth_h: f64,
-    /// For u1 - u, v1, V2, V3, V4: the coefficients of u, v and the input force
+    /// For u1 - u, v1, V2, V3, V4, the outputs of `rk4_stages` in order
+    /// (`step` takes V2 from the acceleration at the start instead): the
+    /// coefficients of u, v and the input force
     /// `fext - m ag` at the step start.
     rows: [[f64; 3]; 5],
     /// The same outputs' terms from the slipping interfaces' constant load.
@@ -493,6 +496,7 @@ impl Rk4Map {
         let load_accel = d.slip_load[0] * d.inv_mass0;
         Rk4Map {
             h,
+            half_h: 0.5 * h,
             sixth_h: h / 6.0,
             rows: std::array::from_fn(|r| {
                 [columns[0][r], columns[1][r], columns[2][r] * d.inv_mass0]
@@ -546,18 +550,22 @@ impl Rk4Map {
         (relative + ag, jerk)
     }
 
-    /// One step of length `hs` from (u, v) where the inputs are `start`. `hs` is
+    /// One step of length `hs` from (u, v) where the inputs are `start` and
+    /// the absolute acceleration `accel`. `hs` is
     /// `self.h` except on a piece's last substep, where it differs by
     /// rounding of the piece's end times (at most [`SAME_STEP`] relative):
     /// that rest is carried to first order with the rates at the end.
     #[inline(always)]
-    fn step(&self, forced: &Forced, start: Inputs, hs: f64, u: f64, v: f64) -> StepEnd {
+    fn step(&self, forced: &Forced, start: Inputs, accel: f64, hs: f64, u: f64, v: f64) -> StepEnd {
         let force = start.force;
         let out = |r: usize| {
             let row = &self.rows[r];
             row[0] * u + row[1] * v + row[2] * force + forced.constant_terms[r]
         };
-        let (du, v1, v2, v3, v4) = (out(0), out(1), out(2), out(3), out(4));
+        // The first stage's rate is the acceleration at the start, known
+        // from the step before: V2 = v + h/2 a.
+        let v2 = v + self.half_h * (accel - start.ag);
+        let (du, v1, v3, v4) = (out(0), out(1), out(3), out(4));
         let u1 = u + du;
         let inputs = Inputs {
             force: force + forced.step_force,
@@ -656,7 +664,9 @@ mod tests {
             for hs in [h, h * (1.0 + 1e-12), h * (1.0 - 4e-10)] {
                 let want = rk.step(t0, u, v, hs);
                 let (a1, jerk1) = rk.accel_and_jerk(t0 + hs, want[0], want[1]);
-                let got = map.step(&forced, map.inputs(&forced, t0 - t_ref), hs, u, v);
+                let start = map.inputs(&forced, t0 - t_ref);
+                let (a0, _) = map.accel_and_jerk_at(&forced, start.force, start.ag, u, v);
+                let got = map.step(&forced, start, a0, hs, u, v);
                 assert!(close(got.u, want[0], 0.1), "u {} {}", got.u, want[0]);
                 assert!(close(got.v, want[1], 1.0), "v {} {}", got.v, want[1]);
                 assert!(
