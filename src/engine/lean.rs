@@ -512,6 +512,7 @@ impl Rk4Map {
         }
     }
 
+    #[inline]
     fn forced(&self, exc: &Excitation) -> Forced {
         let force_rate = exc.fext_rate - self.mass * exc.ag_rate;
         let f1 = force_rate * self.inv_mass;
