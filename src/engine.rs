@@ -14,6 +14,7 @@ use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::system::System;
 
 mod lean;
+mod rk4_map;
 
 /// Excitation over one interval, linear in time from the interval start:
 /// `ag(t) = ag + ag_rate (t - t_start)`, and likewise the external force.
