@@ -137,29 +137,35 @@ impl Simulator {
         }
 
         // Local state: per cluster the displacement since entry and the
-        // velocity; per moving interface its slip, friction work and peak.
+        // velocity; per moving interface its slip and peak.
         let mut shift = [0.0; NC];
         let mut vel: [f64; NC] = std::array::from_fn(|c| self.v[d.bottom[c]]);
         let mut slip: [f64; NC] = std::array::from_fn(|m| {
             let j = iface[m];
             self.u[j] - self.u[j - 1]
         });
+        let slip_at_entry = slip;
         let mut peak_slip: [f64; NC] = std::array::from_fn(|m| self.peak_slip[iface[m]]);
-        let mut e_friction = [0.0; NC];
         let (mut u0, mut t0) = (self.u[0], self.t);
         let (mut e_input, mut e_viscous) = (0.0, 0.0);
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let (mut inputs, mut a0, mut jerk0) = st.start(piece, t0, u0, vel[0]);
         let mut upper = UpperClusters::<NC>::new(d, st.map.h, piece.exc.ag_rate);
+        // The upper clusters' input work is taken over whole runs of steps
+        // under one piece (exact there, as over a step): from this start.
+        let mut run_start = (t0, inputs.ag, vel);
         let mut taken = 0u64;
         let mut pending = None;
         'steps: loop {
             if piece.i > piece.n {
+                e_input += upper.work(run_start, t0);
                 if !st.next_piece(piece, pieces, t0, &mut pending) {
+                    run_start.0 = t0;
                     break;
                 }
                 (inputs, a0, jerk0) = st.start(piece, t0, u0, vel[0]);
                 upper = UpperClusters::new(d, st.map.h, piece.exc.ag_rate);
+                run_start = (t0, inputs.ag, vel);
                 continue;
             }
             let (t1, hs) = st.substep(piece, t0);
@@ -168,7 +174,7 @@ impl Simulator {
             // Per cluster over the step: displacement increment, end velocity.
             let (mut du, mut v_end) = ([0.0; NC], [0.0; NC]);
             (du[0], v_end[0]) = (x.u - u0, x.v);
-            let upper_work = upper.step(&vel, ag0, hs, &mut du, &mut v_end);
+            upper.step(&vel, ag0, hs, &mut du, &mut v_end);
             if !(x.accel >= band_lo && x.accel <= band_hi) && any_stuck_guard_fires(guards, x.accel)
             {
                 break;
@@ -183,7 +189,6 @@ impl Simulator {
                 let increment = du[m + 1] - du[m];
                 let (vrel0, vrel1) = (vel[m + 1] - vel[m], v_end[m + 1] - v_end[m]);
                 let s0 = slip[m];
-                e_friction[m] -= d.slip_force[iface[m]] * increment;
                 let peak = &mut peak_slip[m];
                 hermite::raise_peak(peak, s0, vrel0, s0 + increment, vrel1, hs);
                 slip[m] = s0 + increment;
@@ -194,13 +199,14 @@ impl Simulator {
             hermite::raise_peak(&mut peak_u0, u0, vel[0], x.u, x.v, hs);
             hermite::raise_peak(&mut peak_a0, a0, jerk0, x.accel, x.jerk, hs);
             (u0, vel, a0, jerk0, inputs) = (x.u, v_end, x.accel, x.jerk, x.inputs);
-            e_input += x.input + upper_work;
+            e_input += x.input;
             e_viscous += x.viscous;
             t0 = t1;
             piece.i += 1;
             taken += 1;
         }
 
+        e_input += upper.work(run_start, t0);
         if taken > 0 {
             let (mut shift_all, mut vel_all) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
             shift_all[..NC].copy_from_slice(&shift);
@@ -208,8 +214,11 @@ impl Simulator {
             let n = self.sys.n;
             super::move_bodies(&mut self.u, &mut self.v, d, n, u0, &shift_all, &vel_all);
             for m in 0..NC - 1 {
-                self.e_friction[iface[m]] += e_friction[m];
-                self.peak_slip[iface[m]] = peak_slip[m];
+                // The friction force is constant in the mode: its work is
+                // that force times the slip.
+                let j = iface[m];
+                self.e_friction[j] -= d.slip_force[j] * (slip[m] - slip_at_entry[m]);
+                self.peak_slip[j] = peak_slip[m];
             }
             self.e_input += e_input;
             self.e_viscous += e_viscous;
@@ -229,15 +238,13 @@ struct UpperClusters<const NC: usize> {
     h: f64,
     half_h: f64,
     ag_rate: f64,
-    /// Per cluster: absolute acceleration and mass (for a step of another
-    /// length), `mass h / 6`, and the constant parts of the velocity
-    /// change, the displacement and the mid-step velocity.
+    /// Per cluster: absolute acceleration and mass (for steps of other
+    /// lengths and the work), and the parts of the velocity change and of
+    /// the displacement over a step that are constant over the piece.
     accel: [f64; NC],
     mass: [f64; NC],
-    mass_sixth_h: [f64; NC],
     dv: [f64; NC],
     du: [f64; NC],
-    vm: [f64; NC],
 }
 
 impl<const NC: usize> UpperClusters<NC> {
@@ -250,50 +257,55 @@ impl<const NC: usize> UpperClusters<NC> {
             ag_rate,
             accel,
             mass: std::array::from_fn(|c| d.mass[c]),
-            mass_sixth_h: std::array::from_fn(|c| d.mass[c] * h / 6.0),
             dv: accel.map(|a| h * a - 0.5 * h2 * ag_rate),
             du: accel.map(|a| 0.5 * h2 * a - h3 * ag_rate / 6.0),
-            vm: accel.map(|a| 0.5 * h * a - 0.125 * h2 * ag_rate),
         }
     }
 
     /// Clusters 1.. over a substep of length `hs` from velocities `vel`,
     /// where the ground acceleration starts at `ag0`: their displacement
-    /// increments and end velocities into `du` and `v_end`; returns their
-    /// input work.
+    /// increments and end velocities into `du` and `v_end`.
     #[inline(always)]
-    fn step(
-        &self,
-        vel: &[f64; NC],
-        ag0: f64,
-        hs: f64,
-        du: &mut [f64; NC],
-        v_end: &mut [f64; NC],
-    ) -> f64 {
-        let mut work = 0.0;
+    fn step(&self, vel: &[f64; NC], ag0: f64, hs: f64, du: &mut [f64; NC], v_end: &mut [f64; NC]) {
         if hs != self.h {
             // A piece's last substep, longer or shorter by rounding.
             for c in 1..NC {
-                let [dc, vc, w] =
+                let [dc, vc, _] =
                     upper_cluster_step(vel[c], self.accel[c], self.mass[c], ag0, self.ag_rate, hs);
                 (du[c], v_end[c]) = (dc, vc);
-                work += w;
             }
-            return work;
+            return;
         }
         let h_ag = self.h * ag0;
         let half_h2_ag = self.half_h * h_ag;
-        let ag_mid = ag0 + self.half_h * self.ag_rate;
-        let ag_end = ag0 + self.h * self.ag_rate;
         for c in 1..NC {
             let v = vel[c];
-            let ve = v - h_ag + self.dv[c];
-            let vm = v - 0.5 * h_ag + self.vm[c];
             du[c] = self.h * v - half_h2_ag + self.du[c];
-            v_end[c] = ve;
-            work -= self.mass_sixth_h[c] * (ag0 * v + 4.0 * ag_mid * vm + ag_end * ve);
+            v_end[c] = v - h_ag + self.dv[c];
         }
-        work
+    }
+
+    /// Input work on clusters 1.. from `(t, ag, vel)` (a time, the ground
+    /// acceleration and the cluster velocities then) to `t_end`, under one
+    /// piece: the closed form of `upper_cluster_step`, exact over any
+    /// length.
+    fn work(&self, (t, ag, vel): (f64, f64, [f64; NC]), t_end: f64) -> f64 {
+        let length = t_end - t;
+        if length <= 0.0 {
+            return 0.0;
+        }
+        (1..NC)
+            .map(|c| {
+                upper_cluster_step(
+                    vel[c],
+                    self.accel[c],
+                    self.mass[c],
+                    ag,
+                    self.ag_rate,
+                    length,
+                )[2]
+            })
+            .sum()
     }
 }
 
@@ -439,15 +451,26 @@ mod tests {
         let (_, d) = sliding_scene();
         let (h, ag_rate, ag0) = (1.25e-3, 75.0, -1.2);
         let upper = UpperClusters::<2>::new(&d, h, ag_rate);
-        let vel = [0.1, -0.25];
+        let mut vel = [0.1, -0.25];
         for hs in [h, h * (1.0 + 1e-12)] {
             let (mut du, mut v_end) = ([0.0; 2], [0.0; 2]);
-            let work = upper.step(&vel, ag0, hs, &mut du, &mut v_end);
-            let [du1, v1, w1] =
+            upper.step(&vel, ag0, hs, &mut du, &mut v_end);
+            let [du1, v1, _] =
                 upper_cluster_step(vel[1], d.accel_const[1], d.mass[1], ag0, ag_rate, hs);
             assert!(close(du[1], du1, 1e-3) && close(v_end[1], v1, 1.0));
-            assert!(close(work, w1, 10.0), "{work} {w1}");
         }
+        // The work over a run of steps equals the sum of the steps' works.
+        let start = (0.0, ag0, vel);
+        let mut sum = 0.0;
+        for k in 0..4 {
+            let ag = ag0 + ag_rate * k as f64 * h;
+            let [_, v1, w] =
+                upper_cluster_step(vel[1], d.accel_const[1], d.mass[1], ag, ag_rate, h);
+            sum += w;
+            vel[1] = v1;
+        }
+        let work = upper.work(start, 4.0 * h);
+        assert!(close(work, sum, 10.0), "{work} {sum}");
     }
 
     #[test]
