@@ -4,10 +4,12 @@
 //! `Segment`, guard bracketing, a per-body update) is mostly bookkeeping, so
 //! a run of such steps is taken here with the mode's constants hoisted out of
 //! the loop and the state in local variables: per cluster one displacement
-//! increment and one velocity, per slipping interface its slip, friction work
-//! and peak. The RK4 step of the structure's cluster is written as the affine
-//! map it is for this linear system ([`Rk4Map`]); the upper clusters, guards
-//! and Hermite peaks are those of the general path. The loop stops before
+//! increment and one velocity, per slipping interface its slip and peak. The
+//! RK4 step of the structure's cluster is written as the affine map it is
+//! for this linear system ([`Rk4Map`]); the upper clusters' motion, the
+//! guards and the Hermite peaks are those of the general path, while the
+//! upper clusters' input work and the friction work, exact closed forms, are
+//! taken once per run of steps under one piece. The loop stops before
 //! the first step at whose end a guard of the mode is negative, and the
 //! caller takes that step with event location. The loop goes on from one
 //! piece of excitation to the next (a record's samples), so that a whole
