@@ -106,12 +106,7 @@ impl Simulator {
             let vel = [v0; MAX_BODIES];
             let shift = [0.0; MAX_BODIES]; // used by other clusters only
             super::move_bodies(&mut self.u, &mut self.v, d, self.sys.n, u0, &shift, &vel);
-            self.e_input += e_input;
-            self.e_viscous += e_viscous;
-            self.peak_u0 = peak_u0;
-            self.peak_a0 = peak_a0;
-            self.t = t0;
-            self.stats.steps += taken;
+            self.end_run(t0, taken, [e_input, e_viscous], [peak_u0, peak_a0]);
         }
         pending
     }
@@ -222,14 +217,20 @@ impl Simulator {
                 self.e_friction[j] -= d.slip_force[j] * (slip[m] - slip_at_entry[m]);
                 self.peak_slip[j] = peak_slip[m];
             }
-            self.e_input += e_input;
-            self.e_viscous += e_viscous;
-            self.peak_u0 = peak_u0;
-            self.peak_a0 = peak_a0;
-            self.t = t0;
-            self.stats.steps += taken;
+            self.end_run(t0, taken, [e_input, e_viscous], [peak_u0, peak_a0]);
         }
         pending
+    }
+
+    /// Ends a run of `taken` steps at `t`: adds its input and viscous work,
+    /// sets the structure's peaks (|u0|, |A0|).
+    fn end_run(&mut self, t: f64, taken: u64, [input, viscous]: [f64; 2], [u0, a0]: [f64; 2]) {
+        self.e_input += input;
+        self.e_viscous += viscous;
+        self.peak_u0 = u0;
+        self.peak_a0 = a0;
+        self.t = t;
+        self.stats.steps += taken;
     }
 }
 
