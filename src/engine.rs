@@ -35,8 +35,8 @@ impl Excitation {
     /// every value finite and time not going back.
     #[inline]
     pub fn check(&self, now: f64, t_end: f64) -> Result<(), SimError> {
-        // Finite values have a finite sum unless it overflows: then the
-        // detailed check below finds them all finite.
+        // A finite sum means every value is finite. A sum that is not (a
+        // bad value, or finite ones overflowing) goes to the detailed check.
         let sum = self.ag + self.ag_rate + self.fext + self.fext_rate + t_end;
         if sum.is_finite() && t_end >= now {
             return Ok(());
