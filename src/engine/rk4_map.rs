@@ -69,7 +69,9 @@ pub(super) struct Rk4Map {
 /// The parts of a step that are constant over a piece.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Forced {
-    exc: Excitation,
+    /// Ground acceleration at the piece start and its slope.
+    ag: f64,
+    ag_rate: f64,
     /// Input force `fext - m ag` at the piece start (N) and its slope (N/s).
     force: f64,
     force_rate: f64,
@@ -116,7 +118,8 @@ impl Rk4Map {
         let force_rate = exc.fext_rate - self.mass * exc.ag_rate;
         let f1 = force_rate * self.inv_mass;
         Forced {
-            exc: *exc,
+            ag: exc.ag,
+            ag_rate: exc.ag_rate,
             force: exc.fext - self.mass * exc.ag,
             force_rate,
             step_force: self.h * force_rate,
@@ -131,7 +134,7 @@ impl Rk4Map {
     pub(super) fn inputs(&self, forced: &Forced, tau: f64) -> Inputs {
         Inputs {
             force: forced.force + forced.force_rate * tau,
-            ag: forced.exc.ag + forced.exc.ag_rate * tau,
+            ag: forced.ag + forced.ag_rate * tau,
         }
     }
 
@@ -199,7 +202,7 @@ impl Rk4Map {
             end.input += delta * force_end * v1;
             end.viscous += delta * self.c * v1 * v1;
             end.accel += delta * jerk;
-            let relative_jerk = jerk - forced.exc.ag_rate;
+            let relative_jerk = jerk - forced.ag_rate;
             end.jerk -= delta * (self.w2 * (accel - ag_end) + self.cm * relative_jerk);
         }
         end
