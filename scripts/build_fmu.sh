@@ -16,6 +16,7 @@ cmp -s "$stage/modelDescription.xml" modelDescription/modelDescription.xml || {
 }
 cp target/release/libstacked_live_load.so "$stage/binaries/linux64/StackedLiveLoad.so"
 cp README.md "$stage/documentation/README.md"
+cp -r docs "$stage/documentation/docs"   # the README links into docs/
 cp resources/default_record.csv "$stage/resources/default_record.csv"
 printf '<html><body><p>See <a href="README.md">README.md</a>.</p></body></html>\n' > "$stage/documentation/index.html"
 python3 - "$stage" target/fmu/StackedLiveLoad.fmu <<'PY'
