@@ -155,9 +155,12 @@ def illinois(f, a: float, b: float, fa: float, fb: float, tol: float) -> float:
 
 def fraction_roots(drift, target: float) -> dict:
     """Attached fractions f in [0, FRACTION_MAX] with drift(f) = target: every sign
-    change of drift - target on the grid, refined; `fraction` is the smallest.
-    Without a root: `below` (the stack drifts less than the bare structure) or
-    `above` (more than FRACTION_MAX of the load attached)."""
+    change of drift - target on the grid, refined. Where drift(f) is not monotonic
+    there are several; `fraction` is the one nearest the linear interpolation
+    between the bare structure (0) and the whole load attached (1), which picks 0
+    at mu = 0 and 1 at mu -> infinity. Without a root: `below` (the stack drifts
+    less than the bare structure) or `above` (more than FRACTION_MAX of the load
+    attached)."""
     tol = FLOOR * target
     grid = list(FRACTION_GRID)
     g = [drift(f) - target for f in grid]
@@ -172,7 +175,10 @@ def fraction_roots(drift, target: float) -> dict:
     roots = sorted(roots)
     increasing = all(b >= a for a, b in zip(g, g[1:]))
     if roots:
-        return {"fraction": roots[0], "roots": roots, "status": "found", "increasing": increasing}
+        d0, d1 = g[0], g[len(FRACTION_GRID) - 1]
+        guess = min(max(-d0 / (d1 - d0), 0.0), FRACTION_MAX) if d1 != d0 else 0.5
+        best = min(roots, key=lambda f: (abs(f - guess), -f))
+        return {"fraction": best, "roots": roots, "status": "found", "increasing": increasing}
     below = g[0] > 0
     return {"fraction": 0.0 if below else grid[-1], "roots": [], "status": "below" if below else "above",
             "increasing": increasing}
@@ -213,8 +219,8 @@ def advise(records: list[Path], tp: float, zeta: float, alphas: list[float], mus
         below = per_record < 1.0 - FLOOR
         sweep = [float(np.mean(p[m] if m == "single" else drifts[m]) / np.mean(p["stack"])) for p in points]
         worst = int(np.argmin(sweep))
-        safe = sweep[worst] >= 1.0 - unconservative_tol - FLOOR
-        cheap = ratio - 1.0 <= cost_tol + FLOOR
+        accepted, why = judge(ratio, sweep, [p["factors"] for p in points], cost_tol, unconservative_tol,
+                              mu_uncertainty)
         models[m] = {
             "mean_peak_drift": u[m], "ratio_to_stack": ratio, "direction": direction(ratio),
             "per_record": {"ratios": per_record.tolist(), **spread(per_record),
@@ -222,9 +228,7 @@ def advise(records: list[Path], tp: float, zeta: float, alphas: list[float], mus
                            "largest_shortfall": float(max(0.0, 1.0 - np.min(per_record)))},
             "friction_sweep": {"ratios": sweep, "worst_ratio": sweep[worst],
                                "worst_at_factors": points[worst]["factors"]},
-            "accepted": bool(safe and cheap),
-            "reason": reason(ratio, sweep[worst], points[worst]["factors"], safe, cheap, cost_tol,
-                             unconservative_tol, mu_uncertainty),
+            "accepted": accepted, "reason": why,
         }
     linear = [m for m in LINEAR if models[m]["accepted"]]
     if linear:
@@ -265,8 +269,8 @@ def advise(records: list[Path], tp: float, zeta: float, alphas: list[float], mus
             f"judges the mean over the suite, as design codes do")
     if frac["status"] == "found" and len(frac["roots"]) > 1:
         warnings.append("the rigid model's mean drift is not monotonic in the attached fraction: several fractions "
-                        f"give the stack's drift ({', '.join(f'{r:.3f}' for r in frac['roots'])}); the smallest is "
-                        "reported")
+                        f"give the stack's drift ({', '.join(f'{r:.3f}' for r in frac['roots'])}); the one nearest "
+                        "the linear interpolation between bare and fully attached is reported")
     return {
         "scene": {"Tp": tp, "zeta": zeta, "alphas": alphas, "mus": mus, "muks": muks, "blocks": n},
         "records": [str(r) for r in records], "record_scale": scale,
@@ -289,20 +293,28 @@ def advise(records: list[Path], tp: float, zeta: float, alphas: list[float], mus
     }
 
 
-def reason(ratio, worst, worst_at, safe, cheap, cost_tol, unc_tol, uncertainty) -> str:
-    """Which way and by how much, and why a model is accepted or not."""
+def judge(ratio: float, sweep: list[float], factors: list, cost_tol: float, unc_tol: float,
+          uncertainty: float) -> tuple[bool, str]:
+    """The rule for one simpler model, from its mean drift over the stack's at the
+    nominal friction (`ratio`) and at each point of the friction sweep: accepted if
+    never more than `unc_tol` below the stack and, at the nominal friction, at most
+    `cost_tol` above it. Returns the decision and a message saying which way and by
+    how much."""
     def how(r):
         d = direction(r)
         return "equal to the stack" if d == "equal" else f"{d} by {100 * abs(r - 1):.1f} %"
 
+    worst = int(np.argmin(sweep))
+    safe = sweep[worst] >= 1.0 - unc_tol - FLOOR
+    cheap = ratio - 1.0 <= cost_tol + FLOOR
     text = f"{how(ratio)} at the nominal friction"
-    if uncertainty:
-        text += f"; worst over mu x (1 -+ {uncertainty:g}): {how(worst)} (mu factors {fmt_factors(worst_at)})"
+    if uncertainty and len(sweep) > 1:
+        text += f"; worst over mu x (1 -+ {uncertainty:g}): {how(sweep[worst])} (mu factors {fmt_factors(factors[worst])})"
     if not safe:
-        return f"rejected: {text}; allowed below the stack: {100 * unc_tol:g} %"
+        return False, f"rejected: {text}; allowed below the stack: {100 * unc_tol:g} %"
     if not cheap:
-        return f"rejected: {text}; cost tolerance {100 * cost_tol:g} %"
-    return f"accepted: {text}"
+        return False, f"rejected: {text}; cost tolerance {100 * cost_tol:g} %"
+    return True, f"accepted: {text}"
 
 
 def fmt_factors(factors) -> str:
