@@ -255,13 +255,18 @@ def conclusions(drr: list[dict], runs: list[dict]) -> list[tuple[str, str, str]]
         rest = [r["DRR1"] for r in z3 if r["mu2"] != 0.05]
         low_mu = [r["DRR1"] for r in z3 if r["mu2"] == 0.05]
         ok = min(rest, default=1.0) >= RIGID_LIKE
+        # The exception: mu2 = 0.05 below the rigid-like line; or only visible as a
+        # dip (DRR1 < 0.99 where every other mu2 gives >= 0.99) that stays above it.
         exception_seen = bool(low_mu) and min(low_mu) < RIGID_LIKE
+        dip = bool(low_mu) and min(low_mu) < 0.99 <= min(rest, default=1.0)
         z5 = [r["DRR1"] for r in drr if r["zone"] == "V" and r["Tp"] >= 2.0 - 1e-9 and r["mu2"] == 0.05]
         out.append(("5. Zone III, Tp >= 2 s: the live load acts as rigidly attached, except for mu2 = 0.05.",
                     "holds" if ok and exception_seen else ("holds with a qualification" if ok else "does not hold"),
                     f"min DRR1 for Tp >= 2 s: {min(rest, default=float('nan')):.6f} with mu2 >= 0.1, "
                     f"{min(low_mu, default=float('nan')):.6f} with mu2 = 0.05 (rigid-like: DRR >= {RIGID_LIKE})"
-                    + ("" if exception_seen else "; the mu2 = 0.05 exception does not appear in Zone III")
+                    + ("" if exception_seen else
+                       f"; the mu2 = 0.05 exception shows only as a dip that stays above {RIGID_LIKE}" if dip else
+                       "; the mu2 = 0.05 exception does not appear in Zone III")
                     + (f"; in Zone V mu2 = 0.05 gives DRR1 down to {min(z5):.3f}" if z5 else "") + "."))
     else:
         out.append(("5. Zone III, Tp >= 2 s: rigidly attached, except mu2 = 0.05.", "not run", "Zone III not in this run."))
@@ -394,7 +399,8 @@ def plot_collapse(drr: list[dict], out: Path) -> str:
                        label=f"Zone {zone}, {level} (design PGA {design_pga(zone, level):.2f} g)")
         ax.axhline(RIGID_LIKE, color="k", lw=0.8, ls="--")
         ax.set_xscale("log")
-        ax.set_xlabel("friction capacity over spectral acceleration:  mu1 g / Sa(structure with load attached)")
+        ax.set_xlabel("mu1 g / Sa (friction capacity over the spectral acceleration with the load attached)",
+                      fontsize=9)
         ax.set_title("mu2 >= mu1 (the stack moves as one block)" if one_block else
                      "mu2 < mu1 (the upper block can slide)", fontsize=10)
         ax.grid(alpha=0.3, which="both")
@@ -414,10 +420,12 @@ def collapse_check(drr: list[dict]) -> dict:
       mu / (design PGA) at each Tp and mass ratio. Grid points of two intensities
       whose frictions are in the ratio of their PGAs must agree to the integration
       error; `exact_pairs` counts them and `exact_max_diff` is their largest gap.
-    - across periods the collapse is not exact: in bins of log10(x) 0.1 wide, the
-      medians of DRR1 per intensity (bins with >= 3 points of each of two or more
-      intensities) differ by at most `median_gap_max`; the spread of all points
-      in a bin (10th to 90th percentile) has median `band_p10_p90_median`."""
+    - across periods the collapse is not exact: in bins of log10(x) 0.1 wide where
+      the load slides (median DRR1 below 0.99), the medians of DRR1 per intensity
+      (bins with >= 3 points of each of two or more intensities) differ by at most
+      `median_gap_max`; the spread of all points in a bin (10th to 90th
+      percentile) has median `band_p10_p90_median`. Stacks with mu2 >= mu1 only
+      (one friction: the axis is complete for them)."""
     groups = sorted({(r["zone"], r["level"]) for r in drr})
     pga = {g: design_pga(*g) for g in groups}
     at = {(r["zone"], r["level"], r["Tp"], r["alpha1"], r["alpha2"], r["mu1"], r["mu2"]): r["DRR1"] for r in drr}
@@ -436,6 +444,8 @@ def collapse_check(drr: list[dict]) -> dict:
             bins[math.floor(10 * math.log10(r["mu1"] / r["Sa_rigid"]))][(r["zone"], r["level"])].append(r["DRR1"])
     gaps, bands = [], []
     for per_group in bins.values():
+        if np.median([x for v in per_group.values() for x in v]) >= 0.99:
+            continue  # the load does not slide here: every intensity gives 1
         medians = [float(np.median(v)) for v in per_group.values() if len(v) >= 3]
         if len(medians) >= 2:
             gaps.append(max(medians) - min(medians))
@@ -521,7 +531,8 @@ def collapse_text(c: dict) -> str:
              f"design PGAs agree to {c['exact_max_diff']:.1e} (the equations are homogeneous in ground motion and "
              f"friction)" if c["exact_pairs"] else "no two intensities have frictions in the ratio of their design "
              "PGAs on this grid")
-    across = (f"across periods, in {c['bins']} bins of the axis (0.1 wide in log10) holding two intensities or more, "
+    across = (f"across periods, in the {c['bins']} bins of the axis (0.1 wide in log10) where the load slides "
+              f"(median DRR1 < 0.99) and two intensities or more have points, "
               f"the intensities' median DRR1 differ by at most {c['median_gap_max']:.3f} (median "
               f"{c['median_gap_median']:.3f}); all points of a bin spread over {c['band_p10_p90_median']:.3f} "
               f"(10th to 90th percentile, median over bins)" if c["bins"] else
