@@ -420,7 +420,7 @@ def plot(r: dict, path: Path, title: str):
     ax = axes[1, 0]
     f = r["effective_mass_fraction"]
     ax.hist(f["per_record"]["values"], bins=10, color="0.7", label="per record")
-    ax.axvline(f["mean"], color="tab:red", lw=2, label=f"suite mean drift: {f['mean']:.3f}")
+    ax.axvline(f["mean"], color="tab:red", lw=2, label=f"from the mean drifts: {f['mean']:.3f}")
     ax.axvspan(f["friction_sweep"]["min"], f["friction_sweep"]["max"], color="tab:red", alpha=0.15,
                label="over the friction sweep")
     ax.set_xlabel("effective seismic-mass fraction of the live load")
