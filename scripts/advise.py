@@ -331,7 +331,7 @@ def slip_check(points, nominal, names, max_slip) -> dict:
         s = nominal["slips"][:, j]
         worst_point = max(points, key=lambda p: p["slips"][:, j].max())
         entry = {"block": j + 1, "mean": float(np.mean(s)), "max": float(np.max(s)),
-                 "record_of_max": names[int(np.argmax(s))],
+                 "record_of_max": names[int(np.argmax(s))] if np.max(s) > 0 else None,
                  "max_over_friction_sweep": float(worst_point["slips"][:, j].max()),
                  "at_factors": worst_point["factors"]}
         if allow:
@@ -378,8 +378,9 @@ def print_report(r: dict, suite_name: str):
           + (f"; design value {f['design_value']:.3f}" if f["design_value"] is not None else ""))
     for b in r["peak_slips"]["blocks"]:
         allow = f" (allowable {b['allowable']:g} m)" if "allowable" in b else ""
-        print(f"Block {b['block']}: peak slip on the body below mean {b['mean']:.4f} m, max {b['max']:.4f} m "
-              f"({b['record_of_max']}), {b['max_over_friction_sweep']:.4f} m over the friction sweep{allow}")
+        where = f" ({b['record_of_max']})" if b["record_of_max"] else ""
+        print(f"Block {b['block']}: peak slip on the body below mean {b['mean']:.4f} m, max {b['max']:.4f} m{where}, "
+              f"{b['max_over_friction_sweep']:.4f} m over the friction sweep{allow}")
     for w in r["warnings"]:
         print(f"WARNING: {w}")
 
