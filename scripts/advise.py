@@ -458,8 +458,9 @@ def main(argv=None):
     ap.add_argument("--level", choices=list(seismic.LEVELS),
                     help="with --zone: DBE (the suite as matched, default) or MCE (records x 2)")
     ap.add_argument("--scale", type=float, default=1.0, help="a further factor on every record")
-    ap.add_argument("--cost-tol", type=float, default=0.25,
-                    help="how far above the stack's mean drift a simpler model may be (default 0.25)")
+    ap.add_argument("--cost-tol", "--tol", type=float, default=0.25,
+                    help="how far above the stack's mean drift a simpler model may be (default 0.25; --tol is "
+                         "its old name, from when the tolerance was symmetric)")
     ap.add_argument("--unconservative-tol", type=float, default=0.0,
                     help="how far below the stack's mean drift a simpler model may be (default 0)")
     ap.add_argument("--mu-uncertainty", type=float, default=0.3, help="relative friction uncertainty (default 0.3)")

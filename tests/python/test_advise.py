@@ -226,3 +226,8 @@ def test_the_command_line_writes_json_report_and_png_and_rejects_bad_input(recor
             advise.main(argv)
         assert message in capsys.readouterr().err, args
     assert math.isfinite(r["effective_mass_fraction"]["mean"])
+    # --tol, the old symmetric tolerance's name, now sets the cost tolerance.
+    assert advise.main(["--Tp", "0.5", "--alpha", "0.3", "--mu", "0.2", "--records", str(folder), "--tol", "0.1",
+                        "--mu-uncertainty", "0", "--json", str(out)]) == 0
+    r = json.loads(out.read_text())
+    assert r["rule"]["cost_tolerance"] == 0.1 and len(r["friction_sweep"]) == 1
