@@ -191,3 +191,19 @@ def test_suite_labels_name_the_papers_record_and_the_stand_ins():
         text = (ROOT / "scripts" / script).read_text()
         assert "TAF021" not in text, script
         assert not re.search(r"CHY028[^\n]*\(the paper's record", text), script
+
+
+def test_matching_is_linear_in_the_target_so_mce_is_the_dbe_match_times_two():
+    # IS 1893: the MCE spectrum is twice the DBE spectrum; the matcher (reqpy-m) is
+    # linear in its target, so the study's MCE level (the DBE suite x 2, through the
+    # FMU's recordScale) is the suite one would match to MCE (to rounding).
+    import ground_motions as gmod
+
+    path = RECORDS / "RSN33_PARKF_TMB205.AT2"
+    dbe = gmod.match(path, {"zone": "V", "soil": "I", "level": "DBE"})
+    mce = gmod.match(path, {"zone": "V", "soil": "I", "level": "MCE"})
+    assert float(mce["scale"]) == pytest.approx(2 * float(dbe["scale"]), rel=1e-12)
+    assert np.max(np.abs(mce["sc"] - 2 * dbe["sc"])) <= 1e-12 * np.max(np.abs(mce["sc"]))
+    periods = [0.1, 0.5, 1.0, 2.0]
+    assert np.allclose(seismic.design_spectrum(periods, "V", "I", "MCE"),
+                       2 * seismic.design_spectrum(periods, "V", "I", "DBE"), rtol=1e-15)
