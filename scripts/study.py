@@ -517,11 +517,11 @@ def read_runs(path: Path) -> list[dict]:
     return rows
 
 
-def describe(zones: list[str], level: str) -> str:
+def describe(zones: list[str], level: str, records: int) -> str:
     """One line naming the suites and the level, for conclusions.md and the figures."""
     factor = level_factor(level)
     pgas = ", ".join(f"Zone {z} {design_pga(z, level):.3g} g" for z in zones)
-    return (f"Zone {' and '.join(zones)} suites (11 records each, matched to the IS 1893:2016 hard-soil DBE "
+    return (f"Zone {' and '.join(zones)} suites ({records} records each, matched to the IS 1893:2016 hard-soil DBE "
             f"spectrum, Z/2) at **{level}**: records x {factor:g}, design PGA {pgas}. The Zone III suite is the "
             f"Zone V suite x 0.16/0.36 (one suite at two intensities, not two independent checks).")
 
@@ -546,16 +546,17 @@ def report(runs: list[dict], out: Path, meta: dict):
     write_csv(out / "drr.csv", DRR_COLUMNS, drr)
     levels = list(dict.fromkeys(r["level"] for r in runs))
     zones = sorted({r["zone"] for r in runs}, key=seismic.ZONE_FACTORS.get)
+    n = len({r["record"] for r in runs if r["zone"] == zones[0]})
     lines, files, verdicts = [], [], {}
     for level in levels:
         d = [r for r in drr if r["level"] == level]
         files += plot_figures(d, out, level)
         table = conclusions(d, [r for r in runs if r["level"] == level])
         verdicts[level] = [{"conclusion": c, "verdict": v, "numbers": n} for c, v, n in table]
-        lines += [f"## {level}", "", describe(zones, level), "",
+        lines += [f"## {level}", "", describe(zones, level, n), "",
                   "| paper's conclusion | verdict | numbers from this run |", "| --- | --- | --- |"]
         lines += [f"| {c} | {v} | {n} |" for c, v, n in table] + [""]
-        print(f"{level}: {describe(zones, level)}")
+        print(f"{level}: {describe(zones, level, n)}")
         for c, v, n in table:
             print(f"- {c}\n  {v}: {n}")
     files.append(plot_collapse(drr, out))
