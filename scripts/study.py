@@ -546,17 +546,17 @@ def report(runs: list[dict], out: Path, meta: dict):
     write_csv(out / "drr.csv", DRR_COLUMNS, drr)
     levels = list(dict.fromkeys(r["level"] for r in runs))
     zones = sorted({r["zone"] for r in runs}, key=seismic.ZONE_FACTORS.get)
-    n = len({r["record"] for r in runs if r["zone"] == zones[0]})
+    n_records = len({r["record"] for r in runs if r["zone"] == zones[0]})
     lines, files, verdicts = [], [], {}
     for level in levels:
         d = [r for r in drr if r["level"] == level]
         files += plot_figures(d, out, level)
         table = conclusions(d, [r for r in runs if r["level"] == level])
         verdicts[level] = [{"conclusion": c, "verdict": v, "numbers": n} for c, v, n in table]
-        lines += [f"## {level}", "", describe(zones, level, n), "",
+        lines += [f"## {level}", "", describe(zones, level, n_records), "",
                   "| paper's conclusion | verdict | numbers from this run |", "| --- | --- | --- |"]
         lines += [f"| {c} | {v} | {n} |" for c, v, n in table] + [""]
-        print(f"{level}: {describe(zones, level, n)}")
+        print(f"{level}: {describe(zones, level, n_records)}")
         for c, v, n in table:
             print(f"- {c}\n  {v}: {n}")
     files.append(plot_collapse(drr, out))

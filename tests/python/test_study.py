@@ -56,6 +56,7 @@ def test_quick_study_writes_everything_and_dask_gives_identical_runs(quick, tmp_
     assert (quick / "collapse.png").stat().st_size > 10_000
     text = (quick / "conclusions.md").read_text()
     assert "## DBE" in text and "## MCE" in text and "records x 2, design PGA Zone III 0.16 g, Zone V 0.36 g" in text
+    assert text.count("Zone III and V suites (2 records each, matched") == 2
     meta = json.loads((quick / "study.json").read_text())
     assert [lv["level"] for lv in meta["levels"]] == ["DBE", "MCE"] and meta["zones"] == ["III", "V"]
     assert meta["levels"][1]["design_pga_g"] == {"III": pytest.approx(0.16), "V": pytest.approx(0.36)}
