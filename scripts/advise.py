@@ -508,6 +508,7 @@ def main(argv=None):
     r = advise(records, args.Tp, args.zeta, args.alpha, args.mu, muks, args.cost_tol, args.unconservative_tol,
                args.mu_uncertainty, args.mu_points, args.max_slip, scale)
     r["suite"] = suite_name
+    r["zone"], r["level"] = (None, None) if args.records else (args.zone, label)
     print_report(r, suite_name)
     if args.json:
         args.json.write_text(json.dumps(r, indent=1) + "\n")

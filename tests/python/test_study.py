@@ -148,6 +148,7 @@ def test_advisor_on_a_matched_suite_at_two_levels(quick, tmp_path, capsys):
         assert advise.main(["--Tp", "2.5", "--alpha", "0.25", "0.25", "--mu", "0.5", "0.5", "--records", str(folder),
                             "--scale", scale, "--json", str(path)]) == 0
         out[scale] = json.loads(path.read_text())
+    assert out["1"]["zone"] is None and out["1"]["record_scale"] == 1.0 and out["2"]["record_scale"] == 2.0
     assert out["2"]["mean_peak_drift"]["rigid"] == pytest.approx(2 * out["1"]["mean_peak_drift"]["rigid"], rel=1e-12)
     # A long period and high friction: the load acts as rigidly attached (DRR1 = 1 to 1e-6).
     assert out["1"]["verdict"] == "rigid" and abs(out["1"]["DRR1"] - 1) < 1e-6
