@@ -13,6 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 ZONE_FACTORS = {"II": 0.10, "III": 0.16, "IV": 0.24, "V": 0.36}
+# Intensity level: the share of the zone factor Z that the spectrum is scaled by
+# (IS 1893 (Part 1):2016, clause 6.4.2: DBE is half the MCE).
+LEVELS = {"DBE": 0.5, "MCE": 1.0}
 # Soil type: (end of the 2.5 plateau (s), constant of the 1/T branch)
 SOIL = {"I": (0.40, 1.00), "II": (0.55, 1.36), "III": (0.67, 1.67)}
 # Damping (%) -> multiplying factor on Sa/g (IS 1893 (Part 1):2016, clause 6.4.2)
@@ -48,9 +51,9 @@ def design_spectrum(T, zone: str = "V", soil: str = "I", level: str = "DBE",
     """Design pseudo-acceleration (in g): (Z/2 for DBE, Z for MCE) x Sa/g x damping factor."""
     if zone not in ZONE_FACTORS:
         raise ValueError(f"zone = {zone!r}: must be one of II, III, IV, V")
-    if level not in ("DBE", "MCE"):
+    if level not in LEVELS:
         raise ValueError(f"level = {level!r}: must be DBE or MCE")
-    z = ZONE_FACTORS[zone] * (0.5 if level == "DBE" else 1.0)
+    z = ZONE_FACTORS[zone] * LEVELS[level]
     return z * sa_over_g(T, soil) * damping_factor(zeta)
 
 

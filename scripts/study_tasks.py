@@ -60,7 +60,8 @@ def run_task(task: dict) -> list[dict]:
 
     task: zone, record (path), Tp, alpha (values for alpha1 and alpha2), mu1, mu2
     (lists), fmu (path or None), scripts (this folder, for workers that do not
-    have it on their path). Rows: zone, record, Tp, alpha1, alpha2, mu1, mu2,
+    have it on their path), optional scale (factor on the record: the intensity
+    level, study.py --level / --scale). Rows: zone, record, Tp, alpha1, alpha2, mu1, mu2,
     configuration and peaks; single and rigid rows carry alpha1 = alpha1 + alpha2
     of the stacks they stand for, alpha2 = 0, and blank frictions they do not use."""
     scripts = task.get("scripts")
@@ -69,19 +70,20 @@ def run_task(task: dict) -> list[dict]:
     zone, record, tp, fmu = task["zone"], task["record"], task["Tp"], task.get("fmu")
     name = record.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     key = {"zone": zone, "record": name, "Tp": tp}
+    level = {"recordScale": task["scale"]} if "scale" in task else {}
     rows = []
     totals = sorted({round(a1 + a2, 12) for a1 in task["alpha"] for a2 in task["alpha"]})
     for a in totals:
         rows.append({**key, "alpha1": a, "alpha2": 0.0, "mu1": "", "mu2": "", "configuration": "rigid",
-                     **peaks(record, rigid_params(tp, a), fmu)})
+                     **peaks(record, {**rigid_params(tp, a), **level}, fmu)})
         for mu1 in task["mu1"]:
             rows.append({**key, "alpha1": a, "alpha2": 0.0, "mu1": mu1, "mu2": "",
-                         "configuration": "single", **peaks(record, single_params(tp, a, mu1), fmu)})
+                         "configuration": "single", **peaks(record, {**single_params(tp, a, mu1), **level}, fmu)})
     for a1 in task["alpha"]:
         for a2 in task["alpha"]:
             for mu1 in task["mu1"]:
                 for mu2 in task["mu2"]:
                     rows.append({**key, "alpha1": a1, "alpha2": a2, "mu1": mu1, "mu2": mu2,
                                  "configuration": "stack",
-                                 **peaks(record, stack_params(tp, [a1, a2], [mu1, mu2]), fmu)})
+                                 **peaks(record, {**stack_params(tp, [a1, a2], [mu1, mu2]), **level}, fmu)})
     return rows

@@ -141,9 +141,11 @@ def test_response_spectrum_agrees_with_the_fmu_without_blocks():
 def test_a_three_record_suite_meets_the_zone_v_criterion_and_runs_through_the_fmu(tmp_path):
     import ground_motions as gmod
 
-    records = [RECORDS / f for f in ("RSN15_KERN_TAF021.AT2", "RSN787_LOMAP_SLC270.AT2",
+    records = [RECORDS / f for f in ("RSN15_KERN_TAF111.AT2", "RSN787_LOMAP_SLC270.AT2",
                                      "RSN33_PARKF_TMB205.AT2")]
-    suite = gmod.build_suite(records, "V", "I", "DBE", tmp_path)
+    labels = {f: note for _, f, note in gmod.PAPER_SUITE}
+    suite = gmod.build_suite(records, "V", "I", "DBE", tmp_path, labels)
+    assert [e["note"] for e in suite["records"]] == [labels[r.name] for r in records]
     assert suite["criterion"]["passed"], suite["criterion"]
     assert (tmp_path / "spectra.png").stat().st_size > 10_000
     for entry in suite["records"]:
@@ -160,3 +162,48 @@ def test_a_three_record_suite_meets_the_zone_v_criterion_and_runs_through_the_fm
         with sll.Model() as m:
             peaks = m.run(csv)["peaks"]
         assert np.isfinite(peaks["peakUp"]) and peaks["peakUp"] > 0
+
+
+def test_suite_labels_name_the_papers_record_and_the_stand_ins():
+    # The paper's Table 1 (seed text): #1 Kern County, Taft Lincoln School, PGA 0.18 g;
+    # #6 Chi-Chi CHY028, Mw 6.2, PGA 0.20 g. SOURCES.md: TAF111 is that record,
+    # CHY028-N is the Mw 7.6 main shock at that station (a stand-in).
+    import ground_motions as gmod
+
+    entries = {no: (f, note) for no, f, note in gmod.PAPER_SUITE}
+    assert sorted(entries) == list(range(1, 12))
+    taft, note = entries[1]
+    assert taft == "RSN15_KERN_TAF111.AT2" and "the paper's record" in note
+    assert round(float(np.max(np.abs(sll.read_record(RECORDS / taft, g=1.0)[1]))), 2) == 0.18
+    chichi, note = entries[6]
+    assert chichi == "CHY028-N.AT2" and "stand-in" in note and "Mw 7.6" in note and "Mw 6.2" in note
+    # Only Taft 111 is called the paper's record; every entry is a file of SOURCES.md.
+    assert [no for no, (_, n) in entries.items() if "(the paper's record" in n] == [1]
+    sources = (RECORDS / "SOURCES.md").read_text()
+    for f, _ in entries.values():
+        assert (RECORDS / f).is_file() and f in sources, f
+    row = next(line for line in sources.splitlines() if "| RSN15_KERN_TAF111.AT2 |" in line)
+    assert "paper's, PGA 0.18 g" in row
+    row = next(line for line in sources.splitlines() if "| CHY028-N.AT2 |" in line)
+    assert "main shock, Mw 7.6" in row
+    # The scripts no longer call TAF021 or CHY028-N the paper's record.
+    for script in ("ground_motions.py", "study.py", "advise.py"):
+        text = (ROOT / "scripts" / script).read_text()
+        assert "TAF021" not in text, script
+        assert not re.search(r"CHY028[^\n]*\(the paper's record", text), script
+
+
+def test_matching_is_linear_in_the_target_so_mce_is_the_dbe_match_times_two():
+    # IS 1893: the MCE spectrum is twice the DBE spectrum; the matcher (reqpy-m) is
+    # linear in its target, so the study's MCE level (the DBE suite x 2, through the
+    # FMU's recordScale) is the suite one would match to MCE (to rounding).
+    import ground_motions as gmod
+
+    path = RECORDS / "RSN33_PARKF_TMB205.AT2"
+    dbe = gmod.match(path, {"zone": "V", "soil": "I", "level": "DBE"})
+    mce = gmod.match(path, {"zone": "V", "soil": "I", "level": "MCE"})
+    assert float(mce["scale"]) == pytest.approx(2 * float(dbe["scale"]), rel=1e-12)
+    assert np.max(np.abs(mce["sc"] - 2 * dbe["sc"])) <= 1e-12 * np.max(np.abs(mce["sc"]))
+    periods = [0.1, 0.5, 1.0, 2.0]
+    assert np.allclose(seismic.design_spectrum(periods, "V", "I", "MCE"),
+                       2 * seismic.design_spectrum(periods, "V", "I", "DBE"), rtol=1e-15)
