@@ -225,14 +225,17 @@ class Building:
 
     def couple(self, storeys: list[dict], record, H: float, stop: float | None = None,
                master: str = "jacobi", extrapolation: str = "derivative",
-               event_aware: bool = False, outputs: tuple[str, ...] = ("up",)) -> dict:
+               event_aware: bool = False, outputs: tuple[str, ...] = ("up",),
+               consistent: bool = True) -> dict:
         """Runs the coupled building over `record` = (t, ag in m/s2) with macro
         step H up to `stop` (default: the record's end, which must be a
         multiple of H). Returns time (every communication point, switch
         landings included), on_grid (which are multiples of H), each of
         `outputs` as an array per storey (run["up"][i]), the FMUs' peaks
         (peakUp, peakSlip[j]) per storey, and the cost: fmu_steps (fmi2DoStep
-        calls over all storeys), rollbacks, seconds."""
+        calls over all storeys), rollbacks, seconds. `consistent=False`
+        exchanges as a plain importer does (fmucontainer, for one): every
+        output read right after the step, before any input is set."""
         if master not in MASTERS:
             raise ValueError(f"master = {master!r}: it must be one of {MASTERS}")
         if extrapolation not in EXTRAPOLATIONS:
@@ -250,7 +253,7 @@ class Building:
             raise ValueError("event_aware needs the FMU's tSwitch output (issue 12, item 3)")
         for u in units:
             u.start(stop)
-        run = _Run(units, master, extrapolation, event_aware, outputs)
+        run = _Run(units, master, extrapolation, event_aware, outputs, consistent)
         started = time.perf_counter()
         run.go(H, n_steps)
         result = run.result()
@@ -263,8 +266,9 @@ class Building:
 class _Run:
     """The state of one coupled run: the last exchanged values and the record."""
 
-    def __init__(self, units, master, extrapolation, event_aware, outputs):
+    def __init__(self, units, master, extrapolation, event_aware, outputs, consistent):
         self.units, self.master, self.extrapolation = units, master, extrapolation
+        self.consistent = consistent
         self.event_aware, self.outputs = event_aware, outputs
         self.n = len(units)
         self.previous = None  # (t, shears, accels) of the last communication point
@@ -281,9 +285,12 @@ class _Run:
         depends on Fext) and their slopes over the coming step."""
         u = self.units
         shears = [x.output("baseShear") for x in u]
+        if not self.consistent:
+            accels = [x.output("apAbs") for x in u]
         for i in range(self.n - 1):
             u[i].slave.setReal([u[i].vr["Fext"]], [shears[i + 1]])
-        accels = [x.output("apAbs") for x in u]
+        if self.consistent:
+            accels = [x.output("apAbs") for x in u]
         for i in range(1, self.n):
             u[i].slave.setReal([u[i].vr["ag"]], [accels[i - 1]])
         d_shear, d_accel = [0.0] * self.n, [0.0] * self.n
