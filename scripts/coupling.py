@@ -175,14 +175,26 @@ def exact_building(storeys: list[dict], record, times, defaults: dict | None = N
 class Storey:
     """One FMU instance as a storey: its ports by value reference."""
 
-    def __init__(self, model: Model, params: dict, record_file: str = ""):
-        self.model, self.params, self.record_file = model, dict(params), record_file
+    def __init__(self, index: int, model: Model, params: dict, record_file: str = "",
+                 loaded: list[Model] = ()):
+        self.index, self.model, self.params, self.record_file = index, model, dict(params), record_file
+        # fmpy's logger proxy is process-wide: a message may land in the list
+        # of whichever Model registered last, so look in all of them.
+        self.loaded = list(loaded) or [model]
         self.slave = model.slave
         self.vr = {n: model.vr(n) for n in ("ag", "Fext", "apAbs", "baseShear")}
         self.has_tswitch = "tSwitch" in model.vars
 
     def start(self, stop: float):
-        self.n_blocks = self.model.start(self.params, stop, self.record_file)
+        for m in self.loaded:
+            m.messages.clear()
+        try:
+            self.n_blocks = self.model.start(self.params, stop, self.record_file)
+        except Exception as e:  # a parameter the FMU refused: its message names it and the range
+            raise ValueError(f"storey {self.index}: {self.said(e)}") from None
+
+    def said(self, error: Exception) -> str:
+        return "; ".join(msg for m in self.loaded for msg in m.messages[-3:]) or str(error)
 
     def get(self, names: list[str]) -> list[float]:
         return self.slave.getReal([self.model.vr(n) for n in names])
@@ -197,6 +209,13 @@ class Storey:
         self.slave.setReal([self.vr[name]], [value])
         if slope != 0.0:
             self.slave.setRealInputDerivatives([self.vr[name]], [1], [slope])
+
+    def do_step(self, t: float, h: float):
+        try:
+            self.slave.doStep(t, h)
+        except Exception as e:  # fmpy raises on a non-OK status: name the storey and say why
+            raise RuntimeError(f"storey {self.index}: fmi2DoStep({t:.6g}, {h:.6g}) failed: "
+                               f"{self.said(e)}") from None
 
     def t_switch(self) -> float:
         return self.slave.getReal([self.model.vr("tSwitch")])[0]
@@ -248,7 +267,8 @@ class Building:
         if not (H > 0 and n_steps >= 1 and abs(n_steps * H - stop) <= 1e-9 * stop):
             raise ValueError(f"H = {H}: it must be > 0 and divide the stop time {stop}")
         csv = write_record_csv(t_rec, a_rec, Path(self.tmp.name) / "ground.csv")
-        units = [Storey(self.models[i], p, str(csv) if i == 0 else "") for i, p in enumerate(storeys)]
+        units = [Storey(i + 1, self.models[i], p, str(csv) if i == 0 else "", self.models)
+                 for i, p in enumerate(storeys)]
         if event_aware and not units[0].has_tswitch:
             raise ValueError("event_aware needs the FMU's tSwitch output (issue 12, item 3)")
         for u in units:
@@ -317,16 +337,16 @@ class _Run:
             for i in range(1, self.n):
                 u[i].set_input("ag", accels[i - 1], d_accel[i - 1])
             for x in u:
-                x.slave.doStep(t, h)
+                x.do_step(t, h)
         else:
-            u[0].slave.doStep(t, h)
+            u[0].do_step(t, h)
             for i in range(1, self.n):
                 newest = u[i - 1].output("apAbs")
                 if self.extrapolation == "hold":
                     u[i].set_input("ag", newest, 0.0)
                 else:
                     u[i].set_input("ag", accels[i - 1], (newest - accels[i - 1]) / h)
-                u[i].slave.doStep(t, h)
+                u[i].do_step(t, h)
         self.fmu_steps += self.n
 
     def go(self, H: float, n_steps: int):

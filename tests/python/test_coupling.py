@@ -136,3 +136,14 @@ def test_fmucontainer_building_equals_the_python_master(building, tmp_path, sequ
     exact = exact_building(storeys, rec, run["time"], building.defaults)
     assert exact["never_slips"]
     assert drift_error(run, exact) < 0.2
+
+
+def test_a_storey_parameter_the_fmu_refuses_is_named(building):
+    rec = broadband_record(61, duration=1.0)
+    storeys = random_storeys(62, 2)
+    storeys[1]["Tp"] = -0.3
+    with pytest.raises(ValueError, match=r"storey 2: .*Tp"):
+        building.couple(storeys, rec, 0.01, extrapolation="hold")
+    # the instances are usable again afterwards
+    run = building.couple(random_storeys(62, 2), rec, 0.01, extrapolation="hold")
+    assert np.all(np.isfinite(run["up"]))
