@@ -147,3 +147,50 @@ def test_a_storey_parameter_the_fmu_refuses_is_named(building):
     # the instances are usable again afterwards
     run = building.couple(random_storeys(62, 2), rec, 0.01, extrapolation="hold")
     assert np.all(np.isfinite(run["up"]))
+
+
+@pytest.mark.parametrize("master", coupling.MASTERS)
+def test_first_order_extrapolation_from_output_derivatives(building, master):
+    # The pin: order >= 1.8 with first-order extrapolation (the
+    # slopes from fmi2GetRealOutputDerivatives) on a linear two-storey
+    # building, against the exact solution.
+    rec = broadband_record(71, duration=4.0)
+    storeys = random_storeys(72, 2, blocks_on=1)
+    steps = [0.004, 0.002, 0.001]
+    errors = []
+    for h in steps:
+        run = building.couple(storeys, rec, h, master=master, extrapolation="derivative")
+        exact = exact_building(storeys, rec, run["time"], building.defaults)
+        assert exact["never_slips"]
+        errors.append(drift_error(run, exact))
+    assert observed_order(steps, errors) >= 1.8
+    assert errors[-1] < 5e-3
+
+
+def test_event_aware_master_beats_the_plain_one_on_a_sliding_stack(building):
+    # A sliding two-block stack (mus > muk) on the lower storey: its switches
+    # make the floor's absolute acceleration, the upper storey's ag, jump
+    # inside macro steps. Reference: the event-aware master at H / 16, whose
+    # own change from H / 8 is checked to be small against the errors compared.
+    rec = broadband_record(81, duration=4.0)
+    storeys = random_storeys(82, 2, blocks_on=0, rigid=False)
+    h = 0.01
+    kw = {"master": "jacobi", "extrapolation": "derivative", "outputs": ("up", "slip[1]")}
+    ref = building.couple(storeys, rec, h / 16, event_aware=True, **kw)
+    ref8 = building.couple(storeys, rec, h / 8, event_aware=True, **kw)
+    assert ref["rollbacks"] > 10  # the stack does slide and stick
+
+    def error(run):
+        ref_up = ref["up"][:, ref["on_grid"]][:, :: int(round(run_h(run) / (h / 16)))]
+        return np.max(np.abs(run["up"][:, run["on_grid"]] - ref_up)) / np.max(np.abs(ref_up))
+
+    def run_h(run):
+        return run["time"][run["on_grid"]][1]
+
+    plain = building.couple(storeys, rec, h, event_aware=False, **kw)
+    aware = building.couple(storeys, rec, h, event_aware=True, **kw)
+    assert error(ref8) < 0.2 * error(aware)
+    assert error(aware) < 0.5 * error(plain)
+    slip = ref["peaks"][0]["peakSlip[1]"]
+    assert slip > 1e-3
+    assert abs(aware["peaks"][0]["peakSlip[1]"] - slip) < abs(plain["peaks"][0]["peakSlip[1]"] - slip) + 1e-12
