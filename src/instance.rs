@@ -89,6 +89,8 @@ struct Dynamic {
     start_time: f64,
     stop_time: Option<f64>,
     time: f64,
+    /// `tSwitch`: the first switch inside the last step, or its end.
+    t_switch: f64,
     values: ParameterValues,
     ag: f64,
     fext: f64,
@@ -104,6 +106,7 @@ impl Dynamic {
             start_time: 0.0,
             stop_time: None,
             time: 0.0,
+            t_switch: 0.0,
             values: ParameterValues::default(),
             ag: 0.0,
             fext: 0.0,
@@ -119,7 +122,7 @@ impl Dynamic {
 pub struct SavedState(Dynamic);
 
 const STATE_MAGIC: &[u8; 8] = b"SLLSTATE";
-const STATE_VERSION: u32 = 2;
+const STATE_VERSION: u32 = 3;
 
 /// One FMU instance (see the module docs).
 pub struct Instance {
@@ -241,6 +244,7 @@ impl Instance {
         }
         self.d.start_time = start;
         self.d.time = start;
+        self.d.t_switch = start;
         self.d.stop_time = stop;
         Status::Ok
     }
@@ -527,6 +531,7 @@ impl Instance {
                 Id::Muk(j) => block(j, &p.muk),
                 Id::Ag => self.d.ag,
                 Id::Fext => self.d.fext,
+                Id::TSwitch => self.d.t_switch,
                 _ => {
                     let o = match self.current_outputs(F) {
                         Ok(o) => o,
@@ -695,6 +700,7 @@ impl Instance {
         };
         let sim = self.d.sim.as_mut().expect("built at initialization");
         let t_end = (t + h - self.d.start_time).max(sim.time());
+        sim.watch_switches();
         let result = match &self.record {
             Some((_, gm)) => {
                 record::advance_with_record(sim, t_end, gm, self.d.values.record_scale, &extra)
@@ -704,9 +710,15 @@ impl Instance {
         self.outputs = None;
         self.d.der_ag = 0.0;
         self.d.der_fext = 0.0;
+        let first_switch = sim.first_switch();
         match result {
             Ok(()) => {
                 self.d.time = t + h;
+                self.d.t_switch = if first_switch.is_nan() {
+                    t + h
+                } else {
+                    (first_switch + self.d.start_time).min(t + h)
+                };
                 Status::Ok
             }
             Err(e) => {
@@ -770,6 +782,7 @@ impl Instance {
         w.u32(STATE_VERSION);
         w.u8(d.phase as u8);
         w.f64s(&[d.start_time, d.stop_time.unwrap_or(f64::NAN), d.time]);
+        w.f64(d.t_switch);
         let v = &d.values;
         w.str(&v.record_file);
         w.f64s(&[v.record_scale, v.max_step, v.friction_eps]);
@@ -812,6 +825,7 @@ impl Instance {
             x => return Err(format!("unknown phase {x}")),
         };
         let (start_time, stop, time) = (r.f64()?, r.f64()?, r.f64()?);
+        let t_switch = r.f64()?;
         let mut values = ParameterValues {
             record_file: r.str()?,
             record_scale: r.f64()?,
@@ -840,6 +854,7 @@ impl Instance {
             start_time,
             stop_time: (!stop.is_nan()).then_some(stop),
             time,
+            t_switch,
             values,
             ag,
             fext,

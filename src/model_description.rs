@@ -138,7 +138,7 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
     let (causality, variability) = match (v.id.causality(), kind) {
         (Causality::Parameter, _) => ("parameter", "fixed"),
         (Causality::Input, _) => ("input", "continuous"),
-        (Causality::Output, Kind::Real) => ("output", "continuous"),
+        (Causality::Output, Kind::Real) if v.id.is_continuous() => ("output", "continuous"),
         (Causality::Output, _) => ("output", "discrete"),
     };
     let vr = v.id.vr().to_string();
