@@ -56,6 +56,7 @@ EXTRAPOLATIONS = ("hold", "history", "derivative")
 # A switch closer than this fraction of H to the step's start is the one the
 # master just landed on: rolling back for it again would loop.
 SWITCH_SLACK = 1e-6
+LANDING = 1e-7  # how far past a switch (fraction of H) the event-aware master lands
 
 
 # ---------------------------------------------------------------- records
@@ -366,13 +367,19 @@ class _Run:
             self.step(t, h, values)
             first = min(x.t_switch() for x in self.units)
             if t + SWITCH_SLACK * H < first < end - SWITCH_SLACK * H:
-                # A switch inside: land on it, with the same inputs from t.
+                # A switch inside: land just past it, with the same inputs from
+                # t, so that it happens under the inputs that predicted it (with
+                # the next step's inputs a grazing stick limit may be reached a
+                # little later, again and again).
                 for x, s in zip(self.units, saved):
                     x.slave.setFMUstate(s)
                 self.rollbacks += 1
-                self.step(t, first - t, values)
-                t = first
+                landing = first + LANDING * H
+                self.step(t, landing - t, values)
+                t = landing
                 self.sample(t, False)
+                # A slope through the switch means nothing: start the history afresh.
+                self.previous = None
             else:
                 t, k = end, k + 1
                 self.sample(t, True)
