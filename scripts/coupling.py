@@ -328,13 +328,15 @@ class _Run:
         self.previous = (t, shears, accels)
         return shears, accels, d_shear, d_accel
 
-    def step(self, t: float, h: float, values):
-        """One macro step of every storey from t to t + h (inputs set at t)."""
+    def step(self, t: float, h: float, values, landing: bool = False):
+        """One macro step of every storey from t to t + h (inputs set at t).
+        A landing on a switch steps every storey from the values at t: a
+        Gauss-Seidel chord would reach across the switch's jump."""
         shears, accels, d_shear, d_accel = values
         u = self.units
         for i in range(self.n - 1):
             u[i].set_input("Fext", shears[i + 1], d_shear[i + 1])
-        if self.master == "jacobi":
+        if self.master == "jacobi" or landing:
             for i in range(1, self.n):
                 u[i].set_input("ag", accels[i - 1], d_accel[i - 1])
             for x in u:
@@ -375,7 +377,7 @@ class _Run:
                     x.slave.setFMUstate(s)
                 self.rollbacks += 1
                 landing = first + LANDING * H
-                self.step(t, landing - t, values)
+                self.step(t, landing - t, values, landing=True)
                 t = landing
                 self.sample(t, False)
                 # A slope through the switch means nothing: start the history afresh.
