@@ -49,7 +49,7 @@ import numpy as np
 from scipy.linalg import expm
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from sll import Model  # noqa: E402
+from sll import Model, read_record  # noqa: E402
 
 MASTERS = ("jacobi", "gauss-seidel")
 EXTRAPOLATIONS = ("hold", "history", "derivative")
@@ -75,6 +75,15 @@ def broadband_record(seed: int, duration: float = 8.0, dt: float = 0.005, pga: f
     envelope = np.minimum(1.0, t / (0.15 * duration)) * np.minimum(1.0, (duration - t) / (0.3 * duration))
     a *= np.clip(envelope, 0.0, 1.0)
     return t, a * pga / np.max(np.abs(a))
+
+
+def load_record(record, g: float = 9.81) -> tuple[np.ndarray, np.ndarray]:
+    """(t, ag in m/s2) from a pair of arrays or a record file (sll.read_record:
+    PEER .AT2 in g, CSV time,accel in m/s2)."""
+    if isinstance(record, (str, Path)):
+        return read_record(record, g)
+    t, ag = (np.asarray(v, float) for v in record)
+    return t, ag
 
 
 def write_record_csv(t: np.ndarray, ag: np.ndarray, path: Path) -> Path:
@@ -131,7 +140,7 @@ def exact_building(storeys: list[dict], record, times, defaults: dict | None = N
     if defaults is None:
         with Model() as probe:
             defaults = fmu_defaults(probe)
-    t_rec, a_rec = (np.asarray(v, float) for v in record)
+    t_rec, a_rec = load_record(record)
     times = np.asarray(times, float)
     consts = [storey_constants(p, defaults) for p in storeys]
     m, c, k = shear_building(consts)
@@ -247,9 +256,9 @@ class Building:
                master: str = "jacobi", extrapolation: str = "derivative",
                event_aware: bool = False, outputs: tuple[str, ...] = ("up",),
                consistent: bool = True) -> dict:
-        """Runs the coupled building over `record` = (t, ag in m/s2) with macro
-        step H up to `stop` (default: the record's end, which must be a
-        multiple of H). Returns time (every communication point, switch
+        """Runs the coupled building over `record` ((t, ag in m/s2) or a record
+        file) with macro step H up to `stop` (default: the record's end; the
+        last step is shorter when H does not divide it). Returns time (every communication point, switch
         landings included), on_grid (which are multiples of H), each of
         `outputs` as an array per storey (run["up"][i]), the FMUs' peaks
         (peakUp, peakSlip[j]) per storey, and the cost: fmu_steps (fmi2DoStep
@@ -262,11 +271,11 @@ class Building:
             raise ValueError(f"extrapolation = {extrapolation!r}: it must be one of {EXTRAPOLATIONS}")
         if not 1 <= len(storeys) <= len(self.models):
             raise ValueError(f"{len(storeys)} storeys: this Building holds 1..{len(self.models)}")
-        t_rec, a_rec = (np.asarray(v, float) for v in record)
+        t_rec, a_rec = load_record(record)
         stop = float(t_rec[-1] if stop is None else stop)
-        n_steps = int(round(stop / H))
-        if not (H > 0 and n_steps >= 1 and abs(n_steps * H - stop) <= 1e-9 * stop):
-            raise ValueError(f"H = {H}: it must be > 0 and divide the stop time {stop}")
+        if not (math.isfinite(H) and 0 < H <= stop):
+            raise ValueError(f"H = {H}: it must be > 0 and at most the stop time {stop}")
+        n_steps = math.ceil(stop / H - 1e-9)  # the last step ends at stop
         csv = write_record_csv(t_rec, a_rec, Path(self.tmp.name) / "ground.csv")
         units = [Storey(i + 1, self.models[i], p, str(csv) if i == 0 else "", self.models)
                  for i, p in enumerate(storeys)]
@@ -276,7 +285,7 @@ class Building:
             u.start(stop)
         run = _Run(units, master, extrapolation, event_aware, outputs, consistent)
         started = time.perf_counter()
-        run.go(H, n_steps)
+        run.go(H, n_steps, stop)
         result = run.result()
         result["seconds"] = time.perf_counter() - started
         for u in units:
@@ -352,12 +361,12 @@ class _Run:
                 u[i].do_step(t, h)
         self.fmu_steps += self.n
 
-    def go(self, H: float, n_steps: int):
+    def go(self, H: float, n_steps: int, stop: float):
         t = 0.0
         self.sample(t, True)
         k = 0  # the grid point reached
         while k < n_steps:
-            end = (k + 1) * H
+            end = min((k + 1) * H, stop)
             h = end - t
             values = self.exchange(t)
             if not self.event_aware:

@@ -110,8 +110,16 @@ def test_bad_master_settings_are_refused(building):
         building.couple(random_storeys(42, 2), rec, 0.01, master="newton")
     with pytest.raises(ValueError, match="extrapolation"):
         building.couple(random_storeys(42, 2), rec, 0.01, extrapolation="cubic")
-    with pytest.raises(ValueError, match="divide"):
-        building.couple(random_storeys(42, 2), rec, 0.3)
+    with pytest.raises(ValueError, match="H = "):
+        building.couple(random_storeys(42, 2), rec, -0.01)
+
+
+def test_a_step_that_does_not_divide_the_record_ends_shorter(building):
+    # 1 s at H = 0.3 s: communication points 0, 0.3, 0.6, 0.9, 1.0.
+    rec = broadband_record(43, duration=1.0)
+    run = building.couple(random_storeys(44, 2), rec, 0.3, extrapolation="hold")
+    assert np.allclose(run["time"], [0.0, 0.3, 0.6, 0.9, 1.0], atol=1e-12)
+    assert np.all(np.isfinite(run["up"]))
 
 
 @pytest.mark.parametrize("sequential", [False, True])
