@@ -41,7 +41,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                     ("modelIdentifier", MODEL_IDENTIFIER),
                     ("canHandleVariableCommunicationStepSize", "true"),
                     ("canInterpolateInputs", "true"),
-                    ("maxOutputDerivativeOrder", "0"),
+                    ("maxOutputDerivativeOrder", "2"),
                     ("canGetAndSetFMUstate", "true"),
                     ("canSerializeFMUstate", "true"),
                     ("canNotUseMemoryManagementFunctions", "true"),
