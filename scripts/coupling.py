@@ -354,6 +354,9 @@ class _Run:
         else:
             u[0].do_step(t, h)
             for i in range(1, self.n):
+                # The FMU evaluates apAbs with the Fext value last set, not the
+                # one extrapolated to t + h: set that first.
+                u[i - 1].slave.setReal([u[i - 1].vr["Fext"]], [shears[i] + d_shear[i] * h])
                 newest = u[i - 1].output("apAbs")
                 if self.extrapolation == "hold":
                     u[i].set_input("ag", newest, 0.0)
