@@ -173,8 +173,9 @@ def summary(rows, info, extrapolation) -> list[str]:
                             f"drift order {fitted_order(h, picked):5.2f}  errors {errs}")
                     if case == "sliding":
                         line += "  peak-slip errors " + " ".join(f"{r['peak_slip_error']:.2e}" for r in picked)
-                    lines.append(line + f"  FMU steps {picked[-1]['fmu_steps']}, "
-                                        f"rollbacks {picked[-1]['rollbacks']} at H = {h[-1]:g}")
+                    lines.append(line + f"  at H = {h[-1]:g}: FMU steps {picked[-1]['fmu_steps']}, "
+                                        f"rollbacks {picked[-1]['rollbacks']}, "
+                                        f"{picked[-1]['seconds']:.2f} s (one run)")
     lines.append(f"steps H: {sorted(set(r['H'] for r in rows), reverse=True)}; orders fitted over the "
                  "three smallest")
     lines.append(f"sliding reference: gauss-seidel, {extrapolation}, H = {info['H_ref']:g} s; its "
