@@ -510,7 +510,7 @@ pub fn table() -> Vec<Variable> {
         Id::TSwitch,
         Some("Time"),
         None,
-        "Time of the first stick/slip switch inside the last fmi2DoStep (after its start); the step's end if there was none",
+        "Time of the first stick/slip switch inside the last fmi2DoStep (its start if the step began with one); the step's end if there was none",
     );
     add(
         Id::NEvents,
