@@ -150,7 +150,8 @@ fn landing_exactly_on_t_switch_puts_the_switch_at_the_landing() {
     // located again along other internal steps, falls within 1e-10 s of it,
     // either inside the landing step or at the very start of the next one,
     // which then reports tSwitch = its start. (Measured: 25 of 32 inside,
-    // deviations up to 8e-12 s.)
+    // deviations up to 8e-12 s.) The outputs at the landing point show the
+    // mode after the switch in both cases.
     let h = 0.02;
     let (mut inside, mut at_next_start) = (0, 0);
     for (k, n) in [1, 2, 3].into_iter().enumerate() {
@@ -168,6 +169,19 @@ fn landing_exactly_on_t_switch_puts_the_switch_at_the_landing() {
             restore(&mut inst, &saved);
             step_along(&mut inst, &signal, t0, t1, t0, t_switch);
             let landed = events(&mut inst);
+            // Either way the FMU shows the mode after the switch: the stick
+            // flags read at the landing point are those a microsecond later.
+            let flags = |inst: &mut Instance| {
+                let vrs: Vec<u32> = (1..=8).map(|j| Id::Stuck(j).vr()).collect();
+                let mut out = [0; 8];
+                assert_eq!(inst.get_boolean(&vrs, &mut out), Status::Ok);
+                out
+            };
+            let shown = flags(&mut inst);
+            let landing = inst.save().unwrap();
+            step_along(&mut inst, &signal, t0, t1, t_switch, t_switch + 1e-6);
+            assert_eq!(flags(&mut inst), shown, "stick flags at the landing point");
+            restore(&mut inst, &landing);
             if landed > before {
                 inside += 1;
                 assert!((real(&mut inst, Id::TSwitch) - t_switch).abs() < 1e-10);
