@@ -553,7 +553,7 @@ fn stack_derivatives_match_finite_differences_also_right_after_switches() {
     }
     eprintln!(
         "{points} communication points and {after_switch} right after a switch checked \
-         ({skipped} skipped: a switch within 0.6 ms); worst relative errors {:.1e} (order 1), {:.1e} (order 2)",
+         ({skipped} skipped: a switch within 0.3 ms); worst relative errors {:.1e} (order 1), {:.1e} (order 2)",
         worst[0], worst[1]
     );
     assert!(points >= 150 && after_switch >= 15);
