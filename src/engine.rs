@@ -523,7 +523,7 @@ pub struct Simulator {
     last_event: f64,
     /// Switches are watched from this time on (`watch_switches`).
     watch_from: f64,
-    /// The first switch strictly after `watch_from` (NaN: none yet).
+    /// The first switch at or after `watch_from` (NaN: none yet).
     first_switch: f64,
     stats: Stats,
 }
@@ -611,9 +611,9 @@ impl Simulator {
         self.last_event
     }
 
-    /// Starts watching for the first mode switch strictly after the current
-    /// time: a switch at this very instant (an input jump at a communication
-    /// point) is visible before the step and is not watched for.
+    /// Starts watching for the first mode switch from the current time on
+    /// (a switch that an input jump causes is taken before, by a call that
+    /// advances by zero time).
     pub fn watch_switches(&mut self) {
         self.watch_from = self.t;
         self.first_switch = f64::NAN;
@@ -831,7 +831,7 @@ impl Simulator {
         if res.mode != self.mode {
             self.stats.events += 1;
             self.last_event = self.t;
-            if self.first_switch.is_nan() && self.t > self.watch_from {
+            if self.first_switch.is_nan() && self.t >= self.watch_from {
                 self.first_switch = self.t;
             }
             self.mode = res.mode;

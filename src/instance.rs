@@ -765,15 +765,20 @@ impl Instance {
             fext: self.d.fext,
             fext_rate: self.d.der_fext,
         };
+        let at_start = self.next_excitation();
         let sim = self.d.sim.as_mut().expect("built at initialization");
         let t_end = (t + h - self.d.start_time).max(sim.time());
-        sim.watch_switches();
-        let result = match &self.record {
-            Some((_, gm)) => {
-                record::advance_with_record(sim, t_end, gm, self.d.values.record_scale, &extra)
+        // A jump of an input acts at the communication point, where the
+        // outputs already showed it: tSwitch watches for switches after it.
+        let result = sim.advance(sim.time(), &at_start).and_then(|()| {
+            sim.watch_switches();
+            match &self.record {
+                Some((_, gm)) => {
+                    record::advance_with_record(sim, t_end, gm, self.d.values.record_scale, &extra)
+                }
+                None => sim.advance(t_end, &extra),
             }
-            None => sim.advance(t_end, &extra),
-        };
+        });
         self.outputs = None;
         self.d.der_ag = 0.0;
         self.d.der_fext = 0.0;

@@ -239,6 +239,21 @@ impl Id {
         }
     }
 
+    /// The inputs this output depends on at the same instant (direct
+    /// feedthrough), from the equations (docs/coupling-ports.md). `Fext`
+    /// acts on the structure's load at once: absolute accelerations, stick
+    /// forces and the peak of |apAbs| see it, and a jump of it can break a
+    /// stick (stick flags, and the forces and accelerations of any block).
+    /// Nothing sees `ag`: it moves the support, and friction, the spring and
+    /// the damper act on relative motion, so no absolute acceleration or force
+    /// depends on it at the same instant. The rest is state only.
+    pub fn input_dependencies(self) -> &'static [Id] {
+        match self {
+            Id::ApAbs | Id::PeakApAbs | Id::AbAbs(_) | Id::F(_) | Id::Stuck(_) => &[Id::Fext],
+            _ => &[],
+        }
+    }
+
     /// Whether the variable varies continuously in time (Real inputs and
     /// Real outputs but `tSwitch`, which changes at communication points only).
     pub fn is_continuous(self) -> bool {
@@ -495,7 +510,7 @@ pub fn table() -> Vec<Variable> {
         Id::TSwitch,
         Some("Time"),
         None,
-        "Time of the first stick/slip switch inside the last fmi2DoStep (after its start); the step's end if there was none",
+        "Time of the first stick/slip switch inside the last fmi2DoStep (its start if the step began with one); the step's end if there was none",
     );
     add(
         Id::NEvents,
