@@ -16,7 +16,7 @@ impl Signal {
         let terms = (0..8)
             .map(|_| {
                 let f = rng.uniform(0.5, 8.0);
-                let phase = rng.uniform(0.0, 6.28);
+                let phase = rng.uniform(0.0, std::f64::consts::TAU);
                 (
                     2.0 * std::f64::consts::PI * f,
                     amplitude / 8.0 * rng.uniform(0.5, 1.5),
@@ -149,11 +149,11 @@ fn landing_exactly_on_t_switch_puts_the_switch_at_the_landing() {
     // A master that rolls back and steps to exactly tSwitch: the switch,
     // located again along other internal steps, falls within 1e-10 s of it,
     // either inside the landing step or at the very start of the next one,
-    // which then reports tSwitch = its start. (Measured: 25 of 32 inside,
-    // deviations up to 8e-12 s.) The outputs at the landing point show the
+    // which then reports tSwitch = its start. (Measured: 26 of 32 inside,
+    // moved by up to 6e-12 s; 8e-12 s with other phases of the signal.) The outputs at the landing point show the
     // mode after the switch in both cases.
     let h = 0.02;
-    let (mut inside, mut at_next_start) = (0, 0);
+    let (mut inside, mut at_next_start, mut moved) = (0, 0, 0.0f64);
     for (k, n) in [1, 2, 3].into_iter().enumerate() {
         let mut inst = initialized(&[(Id::NBlocks, n)], &[]);
         let signal = Signal::new(200 + k as u64, 4.0);
@@ -184,16 +184,24 @@ fn landing_exactly_on_t_switch_puts_the_switch_at_the_landing() {
             restore(&mut inst, &landing);
             if landed > before {
                 inside += 1;
-                assert!((real(&mut inst, Id::TSwitch) - t_switch).abs() < 1e-10);
+                let again = real(&mut inst, Id::TSwitch);
+                moved = moved.max((again - t_switch).abs());
+                assert!((again - t_switch).abs() < 1e-10);
             }
             step_along(&mut inst, &signal, t0, t1, t_switch, t1);
             if landed == before {
                 at_next_start += 1;
                 assert!(events(&mut inst) > landed);
-                assert!((real(&mut inst, Id::TSwitch) - t_switch).abs() < 1e-10);
+                let again = real(&mut inst, Id::TSwitch);
+                moved = moved.max((again - t_switch).abs());
+                assert!((again - t_switch).abs() < 1e-10);
             }
         }
     }
+    eprintln!(
+        "landing exactly: the switch inside the landing step {inside} times, at the next start \
+         {at_next_start}; moved by up to {moved:.1e} s"
+    );
     assert!(
         inside + at_next_start >= 20,
         "{inside} + {at_next_start} cases"
