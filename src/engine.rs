@@ -606,6 +606,11 @@ impl Simulator {
         self.t
     }
 
+    /// The external force now, as the last call left it (N).
+    pub fn fext_now(&self) -> f64 {
+        self.fext_now
+    }
+
     /// Time of the latest mode switch (NaN before the first).
     pub fn last_event_time(&self) -> f64 {
         self.last_event

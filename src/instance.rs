@@ -770,7 +770,12 @@ impl Instance {
         let t_end = (t + h - self.d.start_time).max(sim.time());
         // A jump of an input acts at the communication point, where the
         // outputs already showed it: tSwitch watches for switches after it.
-        let result = sim.advance(sim.time(), &at_start).and_then(|()| {
+        let jump = if at_start.fext != sim.fext_now() {
+            sim.advance(sim.time(), &at_start)
+        } else {
+            Ok(())
+        };
+        let result = jump.and_then(|()| {
             sim.watch_switches();
             match &self.record {
                 Some((_, gm)) => {

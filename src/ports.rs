@@ -3,7 +3,7 @@
 //! the inputs set for that step in force, and their time derivatives there.
 
 use crate::engine::{Excitation, Outputs, SimError, Simulator};
-use crate::mode::Dynamics;
+use crate::mode::{stick_capacity, Contact, Dynamics};
 use crate::solver::{Solver, Stepper};
 
 /// How far [`at_step_start`] looks ahead for a switch at the very start of
@@ -20,7 +20,16 @@ pub const SWITCH_LOOKAHEAD: f64 = 1e-10;
 pub fn at_step_start(sim: &Solver, exc: &Excitation) -> Result<Solver, SimError> {
     let mut next = sim.clone();
     let now = next.time();
-    next.advance(now, exc)?;
+    if exc.fext != next.fext_now() {
+        next.advance(now, exc)?;
+    }
+    let imminent = match &next {
+        Solver::Exact(s) => switch_may_be_imminent(s, exc, 100.0 * SWITCH_LOOKAHEAD),
+        Solver::Regularized(_) => false, // no switches
+    };
+    if !imminent {
+        return Ok(next);
+    }
     let mut ahead = next.clone();
     ahead.watch_switches();
     ahead.advance(now + SWITCH_LOOKAHEAD, exc)?;
@@ -28,6 +37,38 @@ pub fn at_step_start(sim: &Solver, exc: &Excitation) -> Result<Solver, SimError>
         next
     } else {
         ahead
+    })
+}
+
+/// Whether a guard of the current mode could reach zero within `horizon`
+/// seconds, from its value and rate now: a cheap screen that spares the
+/// lookahead (which takes a step) at nearly every communication point.
+/// Guards as the engine's: `mus N - |F|` for a stuck interface, `s v_rel`
+/// for one slipping in direction `s`.
+fn switch_may_be_imminent(next: &Simulator, exc: &Excitation, horizon: f64) -> bool {
+    let (s, mode) = (next.system(), next.mode());
+    let d = Dynamics::new(s, mode);
+    let o = next.outputs();
+    // The structure's cluster: absolute acceleration and its rate (as in
+    // `derivatives`); every other cluster's is constant.
+    let a0 = d.accel0(exc.fext - s.k * o.up - s.c * o.vp);
+    let jerk0 = (exc.fext_rate - s.k * o.vp - s.c * (a0 - exc.ag)) * d.inv_mass0;
+    let velocity = |i: usize| if i == 0 { o.vp } else { o.vb[i - 1] };
+    let accel = |i: usize| match d.cluster_of[i] {
+        0 => a0,
+        c => d.accel_const[c],
+    };
+    (1..=s.n).any(|j| match mode.contact[j] {
+        Contact::Free => false,
+        Contact::Stuck => {
+            let rate = if d.cluster_of[j] == 0 { jerk0 } else { 0.0 };
+            let force_rate = d.force_affine(j, mode).0 * rate;
+            stick_capacity(s, j) - o.force[j - 1].abs() <= force_rate.abs() * horizon
+        }
+        slipping => {
+            let (v_rel, a_rel) = (velocity(j) - velocity(j - 1), accel(j) - accel(j - 1));
+            slipping.slip_sign() * v_rel <= a_rel.abs() * horizon
+        }
     })
 }
 

@@ -147,6 +147,14 @@ impl Solver {
         }
     }
 
+    /// The external force now, as the last call left it (N).
+    pub fn fext_now(&self) -> f64 {
+        match self {
+            Solver::Exact(s) => s.fext_now(),
+            Solver::Regularized(s) => s.fext_now(),
+        }
+    }
+
     /// Starts watching for the first stick/slip switch after the current time.
     pub fn watch_switches(&mut self) {
         if let Solver::Exact(s) = self {
