@@ -540,9 +540,8 @@ impl Instance {
         }
         let exc = self.next_excitation();
         let derivatives = match &self.d.sim {
-            Some(sim @ Solver::Exact(_)) => match ports::at_step_start(sim, &exc) {
-                Ok(Solver::Exact(next)) => ports::derivatives(&next, &exc),
-                Ok(Solver::Regularized(_)) => unreachable!("the exact engine stays exact"),
+            Some(Solver::Exact(sim)) => match ports::exact_at_step_start(sim, &exc) {
+                Ok(next) => ports::derivatives(&next, &exc),
                 Err(e) => return self.error(F, e.to_string()),
             },
             _ => {

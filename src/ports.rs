@@ -4,7 +4,7 @@
 
 use crate::engine::{Excitation, Outputs, SimError, Simulator};
 use crate::mode::{stick_capacity, Contact, Dynamics};
-use crate::solver::{Solver, Stepper};
+use crate::solver::Solver;
 
 /// How far [`at_step_start`] looks ahead for a switch at the very start of
 /// the next step (s): a switch located again along other internal steps
@@ -18,16 +18,27 @@ pub const SWITCH_LOOKAHEAD: f64 = 1e-10;
 /// rounding, to the next step: the solver is then taken SWITCH_LOOKAHEAD
 /// ahead, past it, which changes a state of frequency w by a relative w 1e-10.)
 pub fn at_step_start(sim: &Solver, exc: &Excitation) -> Result<Solver, SimError> {
+    Ok(match sim {
+        Solver::Exact(s) => Solver::Exact(exact_at_step_start(s, exc)?),
+        // The regularized method has no switches: only the jump to apply.
+        Solver::Regularized(s) => {
+            let mut next = s.clone();
+            if exc.fext != next.fext_now() {
+                next.advance(next.time(), exc)?;
+            }
+            Solver::Regularized(next)
+        }
+    })
+}
+
+/// [`at_step_start`] for the exact engine.
+pub fn exact_at_step_start(sim: &Simulator, exc: &Excitation) -> Result<Simulator, SimError> {
     let mut next = sim.clone();
     let now = next.time();
     if exc.fext != next.fext_now() {
         next.advance(now, exc)?;
     }
-    let imminent = match &next {
-        Solver::Exact(s) => switch_may_be_imminent(s, exc, 100.0 * SWITCH_LOOKAHEAD),
-        Solver::Regularized(_) => false, // no switches
-    };
-    if !imminent {
+    if !switch_may_be_imminent(&next, exc, 100.0 * SWITCH_LOOKAHEAD) {
         return Ok(next);
     }
     let mut ahead = next.clone();
