@@ -306,13 +306,13 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c,
                                        const fmi2Real *value);
 
 /**
- * Not provided (maxOutputDerivativeOrder = 0): always an error.
+ * Derivatives of order 1 and 2 of continuous Real outputs (docs/coupling-ports.md).
  */
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c,
-                                        const fmi2ValueReference *_vr,
-                                        uintptr_t _nvr,
-                                        const fmi2Integer *_order,
-                                        fmi2Real *_value);
+                                        const fmi2ValueReference *vr,
+                                        uintptr_t nvr,
+                                        const fmi2Integer *order,
+                                        fmi2Real *value);
 
 /**
  * Advances by one communication step (any length; events located inside).

@@ -5,7 +5,7 @@ cd "$(dirname "$0")/.."
 if [ ! -x .venv/bin/python ]; then
   python3 -m venv .venv
 fi
-if ! .venv/bin/python -c "import fmpy, numpy, matplotlib, pytest, reqpy_M, dask, distributed, openseespy" 2>/dev/null; then
+if ! .venv/bin/python -c "import fmpy, numpy, scipy, matplotlib, pytest, reqpy_M, dask, distributed, openseespy, fmu_manipulation_toolbox" 2>/dev/null; then
   .venv/bin/pip install --quiet --disable-pip-version-check -r requirements.txt
 fi
 # openseespy's binary needs the system BLAS/LAPACK (Debian: libblas3, liblapack3).

@@ -521,6 +521,10 @@ pub struct Simulator {
     ag_now: f64,
     fext_now: f64,
     last_event: f64,
+    /// Switches are watched from this time on (`watch_switches`).
+    watch_from: f64,
+    /// The first switch at or after `watch_from` (NaN: none yet).
+    first_switch: f64,
     stats: Stats,
 }
 
@@ -550,6 +554,8 @@ impl Simulator {
             ag_now: 0.0,
             fext_now: 0.0,
             last_event: f64::NAN,
+            watch_from: f64::INFINITY,
+            first_switch: f64::NAN,
             stats: Stats::default(),
         };
         sim.resolve_mode(0);
@@ -600,9 +606,28 @@ impl Simulator {
         self.t
     }
 
+    /// The external force now, as the last call left it (N).
+    pub fn fext_now(&self) -> f64 {
+        self.fext_now
+    }
+
     /// Time of the latest mode switch (NaN before the first).
     pub fn last_event_time(&self) -> f64 {
         self.last_event
+    }
+
+    /// Starts watching for the first mode switch from the current time on
+    /// (a switch that an input jump causes is taken before, by a call that
+    /// advances by zero time).
+    pub fn watch_switches(&mut self) {
+        self.watch_from = self.t;
+        self.first_switch = f64::NAN;
+    }
+
+    /// Time of the first mode switch since [`Simulator::watch_switches`]
+    /// (NaN if none).
+    pub fn first_switch(&self) -> f64 {
+        self.first_switch
     }
 
     /// What the solver has done so far.
@@ -811,6 +836,9 @@ impl Simulator {
         if res.mode != self.mode {
             self.stats.events += 1;
             self.last_event = self.t;
+            if self.first_switch.is_nan() && self.t >= self.watch_from {
+                self.first_switch = self.t;
+            }
             self.mode = res.mode;
             self.dynamics = Dynamics::new(&self.sys, &self.mode);
         }

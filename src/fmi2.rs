@@ -607,21 +607,23 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     })
 }
 
-/// Not provided (maxOutputDerivativeOrder = 0): always an error.
+/// Derivatives of order 1 and 2 of continuous Real outputs (docs/coupling-ports.md).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _nvr: usize,
-    _order: *const fmi2Integer,
-    _value: *mut fmi2Real,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *mut fmi2Real,
 ) -> fmi2Status {
     const F: &str = "fmi2GetRealOutputDerivatives";
     with(c, F, |comp| {
-        comp.instance.error(
-            F,
-            "output derivatives are not provided (maxOutputDerivativeOrder = 0)",
-        )
+        match (slice(vr, nvr), slice(order, nvr), slice_mut(value, nvr)) {
+            (Some(vr), Some(order), Some(value)) => {
+                comp.instance.get_output_derivatives(vr, order, value)
+            }
+            _ => null_argument(&mut comp.instance, F),
+        }
     })
 }
 

@@ -5,6 +5,7 @@
 
 use crate::engine::{Excitation, Outputs};
 use crate::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
+use crate::ports;
 use crate::record::{self, GroundMotion};
 use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
@@ -89,6 +90,8 @@ struct Dynamic {
     start_time: f64,
     stop_time: Option<f64>,
     time: f64,
+    /// `tSwitch`: the first switch inside the last step, or its end.
+    t_switch: f64,
     values: ParameterValues,
     ag: f64,
     fext: f64,
@@ -104,6 +107,7 @@ impl Dynamic {
             start_time: 0.0,
             stop_time: None,
             time: 0.0,
+            t_switch: 0.0,
             values: ParameterValues::default(),
             ag: 0.0,
             fext: 0.0,
@@ -119,7 +123,7 @@ impl Dynamic {
 pub struct SavedState(Dynamic);
 
 const STATE_MAGIC: &[u8; 8] = b"SLLSTATE";
-const STATE_VERSION: u32 = 2;
+const STATE_VERSION: u32 = 3;
 
 /// One FMU instance (see the module docs).
 pub struct Instance {
@@ -241,6 +245,7 @@ impl Instance {
         }
         self.d.start_time = start;
         self.d.time = start;
+        self.d.t_switch = start;
         self.d.stop_time = stop;
         Status::Ok
     }
@@ -415,6 +420,8 @@ impl Instance {
                 Id::Fext => self.d.fext = x,
                 _ => return self.error(F, format!("{} is not a Real", name_of(id))),
             }
+            // Outputs show the inputs set for the next step (a master may iterate).
+            self.outputs = None;
             if id.causality() == Causality::Parameter {
                 self.d.sim = None;
             }
@@ -483,9 +490,88 @@ impl Instance {
             self.build(func)?;
         }
         if self.outputs.is_none() {
-            self.outputs = Some(self.d.sim.as_ref().expect("built above").outputs());
+            let exc = self.next_excitation();
+            let sim = self.d.sim.as_ref().expect("built above");
+            match ports::outputs_at_step_start(sim, &exc) {
+                Ok(o) => self.outputs = Some(o),
+                Err(e) => return Err(self.error(func, e.to_string())),
+            }
         }
         Ok(self.outputs.as_ref().expect("set above"))
+    }
+
+    /// The excitation the next step starts with: the record's piece at the
+    /// current time (the next one if this one ends within rounding of now,
+    /// as a step would take it) plus the inputs and their derivatives.
+    fn next_excitation(&self) -> Excitation {
+        let t = self.d.sim.as_ref().map_or(0.0, |s| s.time());
+        let (a, slope) = match &self.record {
+            Some((_, gm)) => {
+                let (mut a, mut slope, end) = gm.piece_at(t);
+                if end.is_finite() && end - t <= 1e-9 * t.abs().max(1.0) {
+                    let (a_end, slope_end, _) = gm.piece_at(end);
+                    (a, slope) = (a_end, slope_end);
+                }
+                let scale = self.d.values.record_scale;
+                (scale * a, scale * slope)
+            }
+            None => (0.0, 0.0),
+        };
+        Excitation {
+            ag: a + self.d.ag,
+            ag_rate: slope + self.d.der_ag,
+            fext: self.d.fext,
+            fext_rate: self.d.der_fext,
+        }
+    }
+
+    /// fmi2GetRealOutputDerivatives: derivatives of order 1 or 2 of continuous
+    /// Real outputs at the current communication point, in the mode the next
+    /// step starts in, under the inputs and input derivatives set for it.
+    pub fn get_output_derivatives(
+        &mut self,
+        vrs: &[u32],
+        orders: &[i32],
+        out: &mut [f64],
+    ) -> Status {
+        const F: &str = "fmi2GetRealOutputDerivatives";
+        if let Err(s) = self.require(F, &[Phase::StepComplete, Phase::Terminated]) {
+            return s;
+        }
+        let exc = self.next_excitation();
+        let derivatives = match &self.d.sim {
+            Some(Solver::Exact(sim)) => match ports::exact_at_step_start(sim, &exc) {
+                Ok(next) => ports::derivatives(&next, &exc),
+                Err(e) => return self.error(F, e.to_string()),
+            },
+            _ => {
+                return self.error(
+                    F,
+                    "output derivatives are provided by solvers 1 and 2, not by solver 3 (the regularized baseline)",
+                )
+            }
+        };
+        for ((&vr, &order), slot) in vrs.iter().zip(orders).zip(out.iter_mut()) {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            if id.causality() != Causality::Output || !id.is_continuous() {
+                return self.error(
+                    F,
+                    format!(
+                        "{} is not a continuous Real output: it has no derivative",
+                        name_of(id)
+                    ),
+                );
+            }
+            if !(1..=2).contains(&order) {
+                return self.error(F, format!("derivative order {order} of {} is not provided: orders 1 and 2 are (maxOutputDerivativeOrder = 2)", name_of(id)));
+            }
+            let of_order = &derivatives[order as usize - 1];
+            *slot = real_output(of_order, id).expect("every continuous Real output has a field");
+        }
+        Status::Ok
     }
 
     fn readable(&mut self, func: &str) -> Result<(), Status> {
@@ -527,30 +613,15 @@ impl Instance {
                 Id::Muk(j) => block(j, &p.muk),
                 Id::Ag => self.d.ag,
                 Id::Fext => self.d.fext,
+                Id::TSwitch => self.d.t_switch,
                 _ => {
                     let o = match self.current_outputs(F) {
                         Ok(o) => o,
                         Err(s) => return s,
                     };
-                    match id {
-                        Id::Up => o.up,
-                        Id::Vp => o.vp,
-                        Id::ApAbs => o.ap_abs,
-                        Id::BaseShear => o.base_shear,
-                        Id::PeakUp => o.peak_up,
-                        Id::PeakApAbs => o.peak_ap_abs,
-                        Id::Einput => o.e_input,
-                        Id::Ekinetic => o.e_kinetic,
-                        Id::Estrain => o.e_strain,
-                        Id::Eviscous => o.e_viscous,
-                        Id::Efriction => o.e_friction,
-                        Id::Ub(j) => block(j, &o.ub),
-                        Id::Vb(j) => block(j, &o.vb),
-                        Id::Slip(j) => block(j, &o.slip),
-                        Id::AbAbs(j) => block(j, &o.ab_abs),
-                        Id::F(j) => block(j, &o.force),
-                        Id::PeakSlip(j) => block(j, &o.peak_slip),
-                        _ => return self.error(F, format!("{} is not a Real", name_of(id))),
+                    match real_output(o, id) {
+                        Some(x) => x,
+                        None => return self.error(F, format!("{} is not a Real", name_of(id))),
                     }
                 }
             };
@@ -693,20 +764,37 @@ impl Instance {
             fext: self.d.fext,
             fext_rate: self.d.der_fext,
         };
+        let at_start = self.next_excitation();
         let sim = self.d.sim.as_mut().expect("built at initialization");
         let t_end = (t + h - self.d.start_time).max(sim.time());
-        let result = match &self.record {
-            Some((_, gm)) => {
-                record::advance_with_record(sim, t_end, gm, self.d.values.record_scale, &extra)
-            }
-            None => sim.advance(t_end, &extra),
+        // A jump of an input acts at the communication point, where the
+        // outputs already showed it: tSwitch watches for switches after it.
+        let jump = if at_start.fext != sim.fext_now() {
+            sim.advance(sim.time(), &at_start)
+        } else {
+            Ok(())
         };
+        let result = jump.and_then(|()| {
+            sim.watch_switches();
+            match &self.record {
+                Some((_, gm)) => {
+                    record::advance_with_record(sim, t_end, gm, self.d.values.record_scale, &extra)
+                }
+                None => sim.advance(t_end, &extra),
+            }
+        });
         self.outputs = None;
         self.d.der_ag = 0.0;
         self.d.der_fext = 0.0;
+        let first_switch = sim.first_switch();
         match result {
             Ok(()) => {
                 self.d.time = t + h;
+                self.d.t_switch = if first_switch.is_nan() {
+                    t + h
+                } else {
+                    (first_switch + self.d.start_time).min(t + h)
+                };
                 Status::Ok
             }
             Err(e) => {
@@ -770,6 +858,7 @@ impl Instance {
         w.u32(STATE_VERSION);
         w.u8(d.phase as u8);
         w.f64s(&[d.start_time, d.stop_time.unwrap_or(f64::NAN), d.time]);
+        w.f64(d.t_switch);
         let v = &d.values;
         w.str(&v.record_file);
         w.f64s(&[v.record_scale, v.max_step, v.friction_eps]);
@@ -812,6 +901,7 @@ impl Instance {
             x => return Err(format!("unknown phase {x}")),
         };
         let (start_time, stop, time) = (r.f64()?, r.f64()?, r.f64()?);
+        let t_switch = r.f64()?;
         let mut values = ParameterValues {
             record_file: r.str()?,
             record_scale: r.f64()?,
@@ -840,6 +930,7 @@ impl Instance {
             start_time,
             stop_time: (!stop.is_nan()).then_some(stop),
             time,
+            t_switch,
             values,
             ag,
             fext,
@@ -852,6 +943,31 @@ impl Instance {
 
 fn name_of(id: Id) -> String {
     id.name()
+}
+
+/// The field of `o` behind a Real output computed by the simulator.
+fn real_output(o: &Outputs, id: Id) -> Option<f64> {
+    let block = |j: usize, xs: &[f64; MAX_BLOCKS]| xs[j - 1];
+    Some(match id {
+        Id::Up => o.up,
+        Id::Vp => o.vp,
+        Id::ApAbs => o.ap_abs,
+        Id::BaseShear => o.base_shear,
+        Id::PeakUp => o.peak_up,
+        Id::PeakApAbs => o.peak_ap_abs,
+        Id::Einput => o.e_input,
+        Id::Ekinetic => o.e_kinetic,
+        Id::Estrain => o.e_strain,
+        Id::Eviscous => o.e_viscous,
+        Id::Efriction => o.e_friction,
+        Id::Ub(j) => block(j, &o.ub),
+        Id::Vb(j) => block(j, &o.vb),
+        Id::Slip(j) => block(j, &o.slip),
+        Id::AbAbs(j) => block(j, &o.ab_abs),
+        Id::F(j) => block(j, &o.force),
+        Id::PeakSlip(j) => block(j, &o.peak_slip),
+        _ => return None,
+    })
 }
 
 /// What a parsed record depends on: the file (path, size, modification time)

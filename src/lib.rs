@@ -9,6 +9,7 @@
 //! - [`engine`]: RK4 with located events, peaks and energies.
 //! - [`record`]: ground-motion files and driving a simulation through one.
 //! - [`regularized`]: tanh-regularized friction with plain RK4, a baseline.
+//! - [`ports`]: outputs and their derivatives as a coupling master sees them.
 //! - [`solver`]: the FMU's three solver choices behind one type.
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
 //! - [`synthetic`]: the embedded default ground motion.
@@ -22,6 +23,7 @@ pub mod instance;
 pub mod mode;
 pub mod model_description;
 pub mod params;
+pub mod ports;
 pub mod record;
 pub mod regularized;
 pub mod sdof;

@@ -1,7 +1,7 @@
 //! `modelDescription.xml`, generated with quick-xml from the variable table.
 
 use crate::fmi2::GUID;
-use crate::variables::{table, Causality, Kind, Variable, TYPES, UNITS};
+use crate::variables::{table, Causality, Id, Kind, Variable, TYPES, UNITS};
 use quick_xml::events::{BytesDecl, Event};
 use quick_xml::Writer;
 use std::io;
@@ -41,7 +41,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                     ("modelIdentifier", MODEL_IDENTIFIER),
                     ("canHandleVariableCommunicationStepSize", "true"),
                     ("canInterpolateInputs", "true"),
-                    ("maxOutputDerivativeOrder", "0"),
+                    ("maxOutputDerivativeOrder", "2"),
                     ("canGetAndSetFMUstate", "true"),
                     ("canSerializeFMUstate", "true"),
                     ("canNotUseMemoryManagementFunctions", "true"),
@@ -138,7 +138,7 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
     let (causality, variability) = match (v.id.causality(), kind) {
         (Causality::Parameter, _) => ("parameter", "fixed"),
         (Causality::Input, _) => ("input", "continuous"),
-        (Causality::Output, Kind::Real) => ("output", "continuous"),
+        (Causality::Output, Kind::Real) if v.id.is_continuous() => ("output", "continuous"),
         (Causality::Output, _) => ("output", "discrete"),
     };
     let vr = v.id.vr().to_string();
@@ -172,22 +172,48 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
     Ok(())
 }
 
-/// Every output is listed in `Outputs` and, being calculated at
-/// initialization, in `InitialUnknowns` (indices are 1-based positions).
+/// Every output is listed in `Outputs` with the inputs it depends on at the
+/// same instant, and, being calculated at initialization, in
+/// `InitialUnknowns`, where every parameter is a known too (the outputs at
+/// the start depend on the scene). Indices are 1-based positions.
 fn write_structure(w: &mut Writer<Vec<u8>>, variables: &[Variable]) -> io::Result<()> {
-    let outputs: Vec<String> = variables
+    let index_of = |id: Id| {
+        let i = variables.iter().position(|v| v.id == id);
+        (i.expect("every input is in the table") + 1).to_string()
+    };
+    let parameters: Vec<String> = variables
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.id.causality() == Causality::Parameter)
+        .map(|(i, _)| (i + 1).to_string())
+        .collect();
+    let outputs: Vec<(String, Vec<String>)> = variables
         .iter()
         .enumerate()
         .filter(|(_, v)| v.id.causality() == Causality::Output)
-        .map(|(i, _)| (i + 1).to_string())
+        .map(|(i, v)| {
+            let inputs = v.id.input_dependencies().iter().map(|&id| index_of(id));
+            ((i + 1).to_string(), inputs.collect())
+        })
         .collect();
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
             for section in ["Outputs", "InitialUnknowns"] {
                 w.create_element(section).write_inner_content(|w| {
-                    for index in &outputs {
+                    for (index, inputs) in &outputs {
+                        let mut knowns = inputs.clone();
+                        if section == "InitialUnknowns" {
+                            knowns.extend(parameters.iter().cloned());
+                            knowns.sort_by_key(|k| k.parse::<usize>().unwrap_or(0));
+                        }
+                        let kinds = vec!["dependent"; knowns.len()].join(" ");
+                        let knowns = knowns.join(" ");
                         w.create_element("Unknown")
-                            .with_attribute(("index", index.as_str()))
+                            .with_attributes([
+                                ("index", index.as_str()),
+                                ("dependencies", knowns.as_str()),
+                                ("dependenciesKind", kinds.as_str()),
+                            ])
                             .write_empty()?;
                     }
                     Ok(())

@@ -103,6 +103,11 @@ impl RegularizedSimulator {
         self.t
     }
 
+    /// The external force now, as the last call left it (N).
+    pub fn fext_now(&self) -> f64 {
+        self.fext_now
+    }
+
     /// Friction force of interface j at relative velocity `v_rel`.
     fn friction(&self, j: usize, v_rel: f64) -> f64 {
         -self.sys.muk[j] * self.sys.normal[j] * (v_rel / self.eps).tanh()

@@ -147,6 +147,30 @@ impl Solver {
         }
     }
 
+    /// The external force now, as the last call left it (N).
+    pub fn fext_now(&self) -> f64 {
+        match self {
+            Solver::Exact(s) => s.fext_now(),
+            Solver::Regularized(s) => s.fext_now(),
+        }
+    }
+
+    /// Starts watching for the first stick/slip switch after the current time.
+    pub fn watch_switches(&mut self) {
+        if let Solver::Exact(s) = self {
+            s.watch_switches();
+        }
+    }
+
+    /// Time of the first switch since [`Solver::watch_switches`], NaN if
+    /// none (always NaN for the regularized method, which has no switches).
+    pub fn first_switch(&self) -> f64 {
+        match self {
+            Solver::Exact(s) => s.first_switch(),
+            Solver::Regularized(_) => f64::NAN,
+        }
+    }
+
     /// Writes the state with a tag for its kind.
     pub fn write_state(&self, w: &mut ByteWriter) {
         match self {

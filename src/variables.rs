@@ -35,6 +35,7 @@ pub enum Id {
     Estrain,
     Eviscous,
     Efriction,
+    TSwitch,
     Ub(usize),
     Vb(usize),
     Slip(usize),
@@ -102,6 +103,7 @@ impl Id {
             Id::Estrain => 208,
             Id::Eviscous => 209,
             Id::Efriction => 210,
+            Id::TSwitch => 211,
             Id::Ub(j) => at(300, j),
             Id::Vb(j) => at(310, j),
             Id::Slip(j) => at(320, j),
@@ -146,6 +148,7 @@ impl Id {
             208 => Some(Id::Estrain),
             209 => Some(Id::Eviscous),
             210 => Some(Id::Efriction),
+            211 => Some(Id::TSwitch),
             300..=309 => array(Id::Ub),
             310..=319 => array(Id::Vb),
             320..=329 => array(Id::Slip),
@@ -189,6 +192,7 @@ impl Id {
             Id::Estrain => "Estrain".into(),
             Id::Eviscous => "Eviscous".into(),
             Id::Efriction => "Efriction".into(),
+            Id::TSwitch => "tSwitch".into(),
             Id::Ub(j) => indexed("ub", j),
             Id::Vb(j) => indexed("vb", j),
             Id::Slip(j) => indexed("slip", j),
@@ -233,6 +237,27 @@ impl Id {
             Id::Ag | Id::Fext => Causality::Input,
             _ => Causality::Output,
         }
+    }
+
+    /// The inputs this output depends on at the same instant (direct
+    /// feedthrough), from the equations (docs/coupling-ports.md). `Fext`
+    /// acts on the structure's load at once: absolute accelerations, stick
+    /// forces and the peak of |apAbs| see it, and a jump of it can break a
+    /// stick (stick flags, and the forces and accelerations of any block).
+    /// Nothing sees `ag`: it moves the support, and friction, the spring and
+    /// the damper act on relative motion, so no absolute acceleration or force
+    /// depends on it at the same instant. The rest is state only.
+    pub fn input_dependencies(self) -> &'static [Id] {
+        match self {
+            Id::ApAbs | Id::PeakApAbs | Id::AbAbs(_) | Id::F(_) | Id::Stuck(_) => &[Id::Fext],
+            _ => &[],
+        }
+    }
+
+    /// Whether the variable varies continuously in time (Real inputs and
+    /// Real outputs but `tSwitch`, which changes at communication points only).
+    pub fn is_continuous(self) -> bool {
+        self.kind() == Kind::Real && self.causality() != Causality::Parameter && self != Id::TSwitch
     }
 }
 
@@ -480,6 +505,12 @@ pub fn table() -> Vec<Variable> {
         Some("Energy"),
         None,
         "Energy dissipated by friction",
+    );
+    add(
+        Id::TSwitch,
+        Some("Time"),
+        None,
+        "Time of the first stick/slip switch inside the last fmi2DoStep (its start if the step began with one); the step's end if there was none",
     );
     add(
         Id::NEvents,

@@ -1,0 +1,211 @@
+//! What the FMU shows a coupling master at a communication point
+//! (docs/coupling-ports.md): the outputs as the next step starts them, with
+//! the inputs set for that step in force, and their time derivatives there.
+
+use crate::engine::{Excitation, Outputs, SimError, Simulator};
+use crate::mode::{stick_capacity, Contact, Dynamics};
+use crate::solver::Solver;
+
+/// How far [`at_step_start`] looks ahead for a switch at the very start of
+/// the next step (s): a switch located again along other internal steps
+/// moves by up to 8e-12 s (measured), so 1e-10 s.
+pub const SWITCH_LOOKAHEAD: f64 = 1e-10;
+
+/// The solver as the next step starts: the inputs set for it applied at the
+/// current instant (a jump of `Fext` can break a stick; `ag` cannot), and a
+/// switch that the next step takes at its very start taken. (A step that ends
+/// on a switch, as when a master lands on `tSwitch`, may leave it, within
+/// rounding, to the next step: the solver is then taken SWITCH_LOOKAHEAD
+/// ahead, past it, which changes a state of frequency w by a relative w 1e-10.)
+pub fn at_step_start(sim: &Solver, exc: &Excitation) -> Result<Solver, SimError> {
+    Ok(match sim {
+        Solver::Exact(s) => Solver::Exact(exact_at_step_start(s, exc)?),
+        // The regularized method has no switches: only the jump to apply.
+        Solver::Regularized(s) => {
+            let mut next = s.clone();
+            if exc.fext != next.fext_now() {
+                next.advance(next.time(), exc)?;
+            }
+            Solver::Regularized(next)
+        }
+    })
+}
+
+/// [`at_step_start`] for the exact engine.
+pub fn exact_at_step_start(sim: &Simulator, exc: &Excitation) -> Result<Simulator, SimError> {
+    let mut next = sim.clone();
+    let now = next.time();
+    if exc.fext != next.fext_now() {
+        next.advance(now, exc)?;
+    }
+    if !switch_may_be_imminent(&next, exc, 100.0 * SWITCH_LOOKAHEAD) {
+        return Ok(next);
+    }
+    let mut ahead = next.clone();
+    ahead.watch_switches();
+    ahead.advance(now + SWITCH_LOOKAHEAD, exc)?;
+    Ok(if ahead.first_switch().is_nan() {
+        next
+    } else {
+        ahead
+    })
+}
+
+/// Whether a guard of the current mode could reach zero within `horizon`
+/// seconds, from its value and rate now: a cheap screen that spares the
+/// lookahead (which takes a step) at nearly every communication point.
+/// Guards as the engine's: `mus N - |F|` for a stuck interface, `s v_rel`
+/// for one slipping in direction `s`.
+fn switch_may_be_imminent(next: &Simulator, exc: &Excitation, horizon: f64) -> bool {
+    let (s, mode) = (next.system(), next.mode());
+    let d = Dynamics::new(s, mode);
+    let o = next.outputs();
+    // The structure's cluster: absolute acceleration and its rate (as in
+    // `derivatives`); every other cluster's is constant.
+    let a0 = d.accel0(exc.fext - s.k * o.up - s.c * o.vp);
+    let jerk0 = (exc.fext_rate - s.k * o.vp - s.c * (a0 - exc.ag)) * d.inv_mass0;
+    let velocity = |i: usize| if i == 0 { o.vp } else { o.vb[i - 1] };
+    let accel = |i: usize| match d.cluster_of[i] {
+        0 => a0,
+        c => d.accel_const[c],
+    };
+    (1..=s.n).any(|j| match mode.contact[j] {
+        Contact::Free => false,
+        Contact::Stuck => {
+            let rate = if d.cluster_of[j] == 0 { jerk0 } else { 0.0 };
+            let force_rate = d.force_affine(j, mode).0 * rate;
+            stick_capacity(s, j) - o.force[j - 1].abs() <= force_rate.abs() * horizon
+        }
+        slipping => {
+            let (v_rel, a_rel) = (velocity(j) - velocity(j - 1), accel(j) - accel(j - 1));
+            slipping.slip_sign() * v_rel <= a_rel.abs() * horizon
+        }
+    })
+}
+
+/// The outputs as the next step starts (see [`at_step_start`]); the switch
+/// counters are those of the steps taken, which have not seen the new inputs.
+pub fn outputs_at_step_start(sim: &Solver, exc: &Excitation) -> Result<Outputs, SimError> {
+    let mut o = with_jump_in_peak(at_step_start(sim, exc)?.outputs());
+    let taken = sim.outputs();
+    o.n_events = taken.n_events;
+    o.n_ambiguous = taken.n_ambiguous;
+    Ok(o)
+}
+
+/// The running peak of |apAbs| includes its value now: a jump of `Fext`
+/// makes `apAbs` jump at the communication point.
+fn with_jump_in_peak(mut o: Outputs) -> Outputs {
+    o.peak_ap_abs = o.peak_ap_abs.max(o.ap_abs.abs());
+    o
+}
+
+/// Right derivatives of a running peak `max |x|` where `x` has derivatives
+/// `x1`, `x2`: the peak follows `|x|` while `|x|` is at it and rising, and
+/// is flat otherwise. `|x|` within `slack` of the peak counts as at it: the
+/// peak was taken from the same values by another rounding path (a slip, as
+/// a difference of displacements, carries their rounding).
+fn running_peak(peak: f64, x: f64, x1: f64, x2: f64, slack: f64) -> [f64; 2] {
+    if x.abs() < peak - slack {
+        return [0.0, 0.0];
+    }
+    // The sign of x just after now: that of its first non-zero derivative.
+    let s = [x, x1, x2]
+        .into_iter()
+        .find(|&y| y != 0.0)
+        .map_or(0.0, f64::signum);
+    let (a1, a2) = (s * x1, s * x2);
+    if a1 > 0.0 || (a1 == 0.0 && a2 > 0.0) {
+        [a1, a2]
+    } else {
+        [0.0, 0.0]
+    }
+}
+
+/// First and second time derivatives of every continuous output of `next`
+/// (a simulator from [`at_step_start`], so in the mode the next step starts
+/// in), under the excitation of that step: `exc` holds the inputs at the
+/// current instant and their slopes. Entries that are not derivatives of
+/// continuous outputs (`stuck`, counters) are left at their defaults.
+///
+/// In a mode, every cluster but the structure's has a constant absolute
+/// acceleration; the structure's is `(F_slip + load) / M0` with
+/// `load = Fext - k u0 - c v0`, whose derivatives follow from the state and
+/// the inputs (`Fext` is linear over a step: its second derivative is 0).
+pub fn derivatives(next: &Simulator, exc: &Excitation) -> [Outputs; 2] {
+    let s = next.system();
+    let mode = next.mode();
+    let d = Dynamics::new(s, mode);
+    let o = with_jump_in_peak(next.outputs());
+    let (k, c, n) = (s.k, s.c, s.n);
+    let (ag, ag1) = (exc.ag, exc.ag_rate);
+
+    // The structure's cluster: absolute acceleration and its derivatives.
+    let acc0 = d.accel0(exc.fext - k * o.up - c * o.vp);
+    let rel0 = acc0 - ag;
+    let acc0_1 = (exc.fext_rate - k * o.vp - c * rel0) * d.inv_mass0;
+    let rel0_1 = acc0_1 - ag1;
+    let acc0_2 = (-k * rel0 - c * rel0_1) * d.inv_mass0;
+    // Every body i = 0..=n: velocity relative to the support, absolute
+    // acceleration and its two derivatives.
+    let velocity = |i: usize| if i == 0 { o.vp } else { o.vb[i - 1] };
+    let accel = |i: usize| match d.cluster_of[i] {
+        0 => [acc0, acc0_1, acc0_2],
+        cl => [d.accel_const[cl], 0.0, 0.0],
+    };
+
+    let (mut d1, mut d2) = (Outputs::default(), Outputs::default());
+    [d1.up, d2.up] = [o.vp, rel0];
+    [d1.vp, d2.vp] = [rel0, rel0_1];
+    [d1.ap_abs, d2.ap_abs] = [acc0_1, acc0_2];
+    [d1.base_shear, d2.base_shear] = [k * o.vp + c * rel0, k * rel0 + c * rel0_1];
+    [d1.e_strain, d2.e_strain] = [k * o.up * o.vp, k * (o.vp * o.vp + o.up * rel0)];
+    [d1.e_viscous, d2.e_viscous] = [c * o.vp * o.vp, 2.0 * c * o.vp * rel0];
+    const ROUNDING: f64 = 1e-12;
+    let slack = ROUNDING * o.peak_up;
+    [d1.peak_up, d2.peak_up] = running_peak(o.peak_up, o.up, o.vp, rel0, slack);
+    let slack = ROUNDING * o.peak_ap_abs;
+    [d1.peak_ap_abs, d2.peak_ap_abs] = running_peak(o.peak_ap_abs, o.ap_abs, acc0_1, acc0_2, slack);
+
+    // Momentum and kinetic energy in relative coordinates.
+    let (mut p, mut p1, mut ek1, mut ek2) = (0.0, 0.0, 0.0, 0.0);
+    for i in 0..=n {
+        let (m, v, a) = (s.mass[i], velocity(i), accel(i));
+        let (rel, rel1) = (a[0] - ag, a[1] - ag1);
+        p += m * v;
+        p1 += m * rel;
+        ek1 += m * v * rel;
+        ek2 += m * (rel * rel + v * rel1);
+    }
+    [d1.e_kinetic, d2.e_kinetic] = [ek1, ek2];
+    d1.e_input = exc.fext * o.vp - ag * p;
+    d2.e_input = exc.fext_rate * o.vp + exc.fext * rel0 - ag1 * p - ag * p1;
+
+    for j in 1..=n {
+        let b = j - 1;
+        let (a, below) = (accel(j), accel(j - 1));
+        let (v_rel, a_rel) = (velocity(j) - velocity(j - 1), a[0] - below[0]);
+        [d1.ub[b], d2.ub[b]] = [velocity(j), a[0] - ag];
+        [d1.vb[b], d2.vb[b]] = [a[0] - ag, a[1] - ag1];
+        [d1.slip[b], d2.slip[b]] = [v_rel, a_rel];
+        [d1.ab_abs[b], d2.ab_abs[b]] = [a[1], a[2]];
+        // A stuck interface carries M_above A + const; a slipping one a constant.
+        let mass_above = if s.is_free(j) {
+            0.0
+        } else {
+            d.force_affine(j, mode).0
+        };
+        [d1.force[b], d2.force[b]] = [mass_above * a[1], mass_above * a[2]];
+        // Friction power -F v_rel (zero on a stuck interface: v_rel = a_rel = 0).
+        let f = o.force[b];
+        d1.e_friction_of[b] = -f * v_rel;
+        d2.e_friction_of[b] = -(d1.force[b] * v_rel + f * a_rel);
+        let body = |i: usize| if i == 0 { o.up } else { o.ub[i - 1] };
+        let slack = ROUNDING * (o.peak_slip[b] + body(j).abs() + body(j - 1).abs());
+        [d1.peak_slip[b], d2.peak_slip[b]] =
+            running_peak(o.peak_slip[b], o.slip[b], v_rel, a_rel, slack);
+    }
+    d1.e_friction = d1.e_friction_of.iter().sum();
+    d2.e_friction = d2.e_friction_of.iter().sum();
+    [d1, d2]
+}
