@@ -784,11 +784,18 @@ impl Instance {
             }
         });
         self.outputs = None;
-        self.d.der_ag = 0.0;
-        self.d.der_fext = 0.0;
         let first_switch = sim.first_switch();
+        let fext_end = sim.fext_now();
         match result {
             Ok(()) => {
+                // The inputs stand where their slopes took them: the outputs
+                // at t + h see them there, and an input left alone is held at
+                // that value (Fext exactly as the engine ended the step, so
+                // the next step sees no jump).
+                self.d.ag += self.d.der_ag * h;
+                self.d.fext = fext_end;
+                self.d.der_ag = 0.0;
+                self.d.der_fext = 0.0;
                 self.d.time = t + h;
                 self.d.t_switch = if first_switch.is_nan() {
                     t + h

@@ -761,3 +761,39 @@ fn exactly_the_declared_outputs_see_an_input_set_at_a_communication_point() {
         }
     }
 }
+
+#[test]
+fn an_input_ramp_ends_where_its_slope_took_it() {
+    // A master sets Fext and ag with slopes over a step. At the step's end,
+    // before it sets anything, the inputs read back as the ramps' ends and
+    // the outputs are those with the inputs set there explicitly (so a
+    // Jacobi master that reads before it sets exchanges values at t + H);
+    // a step without new inputs then holds those values.
+    let (f0, q, a0, r, h) = (300.0, 5000.0, 1.0, -40.0, 0.02);
+    let mut ramped = initialized(&[], &[]);
+    let mut explicit = initialized(&[], &[]);
+    for inst in [&mut ramped, &mut explicit] {
+        set_inputs(
+            inst,
+            &Inputs {
+                ag: a0,
+                ag_rate: r,
+                fext: f0,
+                fext_rate: q,
+            },
+        );
+        assert_eq!(inst.do_step(0.0, h), Status::Ok);
+    }
+    assert_eq!(real(&mut ramped, Id::Fext), f0 + q * h);
+    assert!((real(&mut ramped, Id::Ag) - (a0 + r * h)).abs() < 1e-15);
+    let ends = [(Id::Fext, f0 + q * h), (Id::Ag, real(&mut ramped, Id::Ag))];
+    for (id, x) in ends {
+        assert_eq!(set(&mut explicit, id, x), Status::Ok);
+    }
+    assert_eq!(all_outputs(&mut ramped), all_outputs(&mut explicit));
+    for inst in [&mut ramped, &mut explicit] {
+        assert_eq!(inst.do_step(h, h), Status::Ok);
+    }
+    assert_eq!(all_outputs(&mut ramped), all_outputs(&mut explicit));
+    assert_eq!(real(&mut ramped, Id::Fext), f0 + q * h, "held");
+}
