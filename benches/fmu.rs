@@ -4,7 +4,7 @@
 //! in one fmi2DoStep; the engine alone on the same record is the baseline.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use stacked_live_load::fmi2::*;
+use stacked_live_load::fmi::c_api::*;
 use stacked_live_load::{record, GroundMotion, Params, Settings, Simulator};
 use std::ffi::CString;
 use std::path::PathBuf;

@@ -17,13 +17,10 @@
 #![warn(missing_docs)]
 
 pub mod engine;
-pub mod fmi2;
+pub mod fmi;
 pub mod hermite;
-pub mod instance;
 pub mod mode;
-pub mod model_description;
 pub mod params;
-pub mod ports;
 pub mod record;
 pub mod regularized;
 pub mod sdof;
@@ -31,7 +28,6 @@ pub mod snapshot;
 pub mod solver;
 pub mod synthetic;
 pub mod system;
-pub mod variables;
 
 pub use engine::{Excitation, Outputs, SimError, Simulator, Stats};
 pub use params::{Method, ParamError, Params, Settings, MAX_BLOCKS};

@@ -33,7 +33,7 @@ fn c_program_runs_a_simulation_through_the_header() {
     );
     let run = Command::new(&out)
         .arg(library())
-        .arg(stacked_live_load::fmi2::GUID)
+        .arg(stacked_live_load::fmi::c_api::GUID)
         .output()
         .unwrap();
     let _ = std::fs::remove_file(&out);

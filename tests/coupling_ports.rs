@@ -3,8 +3,8 @@
 
 mod common;
 use common::Rng;
-use stacked_live_load::instance::{Instance, NullSink, SavedState, Status};
-use stacked_live_load::variables::{Causality, Id, Kind};
+use stacked_live_load::fmi::instance::{Instance, NullSink, SavedState, Status};
+use stacked_live_load::fmi::variables::{Causality, Id, Kind};
 
 /// A seeded broadband ground acceleration (m/s2): a sum of sines with random
 /// frequencies (0.5-8 Hz), amplitudes and phases, ramped in over 0.2 s.
@@ -235,7 +235,7 @@ fn continuous_outputs() -> Vec<Id> {
 
 /// The same, with their declared types (Displacement, Force, ...).
 fn continuous_outputs_with_type() -> Vec<(Id, &'static str)> {
-    stacked_live_load::variables::table()
+    stacked_live_load::fmi::variables::table()
         .into_iter()
         .filter(|v| v.id.causality() == Causality::Output && v.id.is_continuous())
         .map(|v| (v.id, v.declared_type.unwrap()))
@@ -631,7 +631,7 @@ fn derivatives_that_do_not_exist_are_refused_by_name() {
 
 /// Every output's value, as f64 (Integers and Booleans converted).
 fn all_outputs(inst: &mut Instance) -> Vec<(Id, f64)> {
-    let ids: Vec<Id> = stacked_live_load::variables::table()
+    let ids: Vec<Id> = stacked_live_load::fmi::variables::table()
         .into_iter()
         .map(|v| v.id)
         .filter(|id| id.causality() == Causality::Output)
@@ -742,7 +742,7 @@ fn exactly_the_declared_outputs_see_an_input_set_at_a_communication_point() {
             }
             assert_eq!(inst.do_step(t0, h), Status::Ok);
         }
-        for v in stacked_live_load::variables::table() {
+        for v in stacked_live_load::fmi::variables::table() {
             for &input in v.id.input_dependencies() {
                 if present(v.id) {
                     assert!(

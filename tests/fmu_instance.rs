@@ -2,8 +2,8 @@
 //! the C program and the fmpy suite exercise the ABI itself).
 
 mod common;
-use stacked_live_load::instance::{Instance, LogSink, Phase, Status};
-use stacked_live_load::variables::Id;
+use stacked_live_load::fmi::instance::{Instance, LogSink, Phase, Status};
+use stacked_live_load::fmi::variables::Id;
 use stacked_live_load::{record, GroundMotion, Params, Settings, Simulator};
 use std::sync::{Arc, Mutex};
 

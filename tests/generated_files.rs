@@ -20,7 +20,7 @@ fn check(committed: &str, generated: &str) {
 fn model_description_is_fresh() {
     check(
         "modelDescription/modelDescription.xml",
-        &stacked_live_load::model_description::model_description(),
+        &stacked_live_load::fmi::model_description::model_description(),
     );
 }
 

@@ -2,6 +2,6 @@
 fn main() {
     print!(
         "{}",
-        stacked_live_load::model_description::model_description()
+        stacked_live_load::fmi::model_description::model_description()
     );
 }

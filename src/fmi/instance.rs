@@ -1,15 +1,15 @@
 //! One FMU instance in safe Rust: the FMI 2.0 Co-Simulation state machine,
 //! variables, inputs and their derivatives, the ground-motion record, the
-//! simulator, status queries and saved states. The C ABI in [`crate::fmi2`]
+//! simulator, status queries and saved states. The C ABI in [`crate::fmi::c_api`]
 //! only checks pointers, converts arguments and calls in here.
 
 use crate::engine::{Excitation, Outputs};
 use crate::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
-use crate::ports;
+use crate::fmi::ports;
 use crate::record::{self, GroundMotion};
 use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
-use crate::variables::{Causality, Id};
+use crate::fmi::variables::{Causality, Id};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 

@@ -1,7 +1,7 @@
 //! `modelDescription.xml`, generated with quick-xml from the variable table.
 
-use crate::fmi2::GUID;
-use crate::variables::{table, Causality, Id, Kind, Variable, TYPES, UNITS};
+use crate::fmi::c_api::GUID;
+use crate::fmi::variables::{table, Causality, Id, Kind, Variable, TYPES, UNITS};
 use quick_xml::events::{BytesDecl, Event};
 use quick_xml::Writer;
 use std::io;

@@ -1,0 +1,229 @@
+//! The FMI 2.0 Co-Simulation C API: its C types, and the panic boundary and
+//! argument checks every export goes through. Every export is a thin wrapper: it
+//! checks pointers, converts arguments, calls the safe [`Instance`] inside a
+//! panic boundary (a panic becomes `fmi2Fatal` and a log message, never an
+//! unwind into the importer) and returns the status. No global state.
+#![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
+
+use crate::fmi::instance::{Instance, LogSink, NullSink, SavedState, Status};
+use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// An instance, as the importer holds it.
+pub type fmi2Component = *mut c_void;
+/// The importer's pointer, passed back to its callbacks.
+pub type fmi2ComponentEnvironment = *mut c_void;
+/// A saved state.
+pub type fmi2FMUstate = *mut c_void;
+/// A variable's value reference.
+pub type fmi2ValueReference = c_uint;
+/// FMI Real.
+pub type fmi2Real = f64;
+/// FMI Integer.
+pub type fmi2Integer = c_int;
+/// FMI Boolean (0 false, otherwise true).
+pub type fmi2Boolean = c_int;
+/// FMI String (NUL-terminated UTF-8).
+pub type fmi2String = *const c_char;
+/// One byte of a serialized state.
+pub type fmi2Byte = c_char;
+/// fmi2OK = 0, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending.
+pub type fmi2Status = c_int;
+/// fmi2ModelExchange = 0, fmi2CoSimulation = 1.
+pub type fmi2Type = c_int;
+/// fmi2DoStepStatus = 0, fmi2PendingStatus, fmi2LastSuccessfulTime, fmi2Terminated.
+pub type fmi2StatusKind = c_int;
+
+/// The importer's logger (variadic, printf-like).
+pub type fmi2CallbackLogger = Option<
+    unsafe extern "C" fn(
+        fmi2ComponentEnvironment,
+        fmi2String,
+        fmi2Status,
+        fmi2String,
+        fmi2String,
+        ...
+    ),
+>;
+/// The importer's allocator (unused: canNotUseMemoryManagementFunctions).
+pub type fmi2CallbackAllocateMemory = Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>;
+/// The importer's deallocator (unused).
+pub type fmi2CallbackFreeMemory = Option<unsafe extern "C" fn(*mut c_void)>;
+/// Asynchronous step callback (unused).
+pub type fmi2StepFinished = Option<unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2Status)>;
+
+/// The importer's callbacks (FMI 2.0 `fmi2CallbackFunctions`).
+#[repr(C)]
+pub struct fmi2CallbackFunctions {
+    /// Logger (may be NULL).
+    pub logger: fmi2CallbackLogger,
+    /// Allocator (unused).
+    pub allocateMemory: fmi2CallbackAllocateMemory,
+    /// Deallocator (unused).
+    pub freeMemory: fmi2CallbackFreeMemory,
+    /// Step callback (unused).
+    pub stepFinished: fmi2StepFinished,
+    /// Passed back to the logger.
+    pub componentEnvironment: fmi2ComponentEnvironment,
+}
+
+/// The GUID of this model description (change it when the interface changes).
+pub const GUID: &str = "{6b1f0c9e-3a57-4d2b-9c84-57acced11fe2}";
+
+const OK: fmi2Status = Status::Ok as fmi2Status;
+const ERROR: fmi2Status = Status::Error as fmi2Status;
+
+/// Passes messages to the importer's logger, always as the argument of a
+/// "%s" format so that a '%' in a message is never interpreted.
+struct CallbackSink {
+    logger: fmi2CallbackLogger,
+    env: fmi2ComponentEnvironment,
+    name: CString,
+}
+
+fn c_text(s: &str) -> CString {
+    CString::new(s.replace('\0', " ")).expect("NULs removed")
+}
+
+impl LogSink for CallbackSink {
+    fn log(&self, status: Status, category: &str, message: &str) {
+        if let Some(logger) = self.logger {
+            let (category, message) = (c_text(category), c_text(message));
+            unsafe {
+                logger(
+                    self.env,
+                    self.name.as_ptr(),
+                    status as fmi2Status,
+                    category.as_ptr(),
+                    c"%s".as_ptr(),
+                    message.as_ptr(),
+                )
+            };
+        }
+    }
+}
+
+/// What a `fmi2Component` points to.
+struct Component {
+    instance: Instance,
+    /// Backing store of the strings returned by fmi2GetString.
+    strings: Vec<CString>,
+}
+
+fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// Runs `f` on the component behind `c` inside a panic boundary.
+unsafe fn with(
+    c: fmi2Component,
+    func: &str,
+    f: impl FnOnce(&mut Component) -> Status,
+) -> fmi2Status {
+    if c.is_null() {
+        return ERROR;
+    }
+    let comp = &mut *(c as *mut Component);
+    match catch_unwind(AssertUnwindSafe(|| f(&mut *comp))) {
+        Ok(status) => status as fmi2Status,
+        Err(p) => comp
+            .instance
+            .fatal(func, &format!("internal error: {}", panic_text(&*p)))
+            as fmi2Status,
+    }
+}
+
+/// Builds a slice from a C array, or None if the pointer is null with n > 0.
+unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    if n == 0 {
+        Some(&[])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(std::slice::from_raw_parts(p, n))
+    }
+}
+
+unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    if n == 0 {
+        Some(&mut [])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(std::slice::from_raw_parts_mut(p, n))
+    }
+}
+
+fn null_argument(inst: &mut Instance, func: &str) -> Status {
+    inst.error(func, "a required pointer argument is NULL")
+}
+
+unsafe fn string_arg(s: fmi2String) -> Option<String> {
+    (!s.is_null()).then(|| CStr::from_ptr(s).to_string_lossy().into_owned())
+}
+
+// The exports in four files, declared in the standard's order (the header keeps it).
+mod lifecycle;
+
+mod values;
+
+mod fmu_state;
+
+mod co_simulation;
+
+pub use co_simulation::*;
+pub use fmu_state::*;
+pub use lifecycle::*;
+pub use values::*;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fmi::instance::Phase;
+
+    #[test]
+    fn a_panic_inside_a_call_becomes_fmi2_fatal_not_an_unwind() {
+        let callbacks = fmi2CallbackFunctions {
+            logger: None,
+            allocateMemory: None,
+            freeMemory: None,
+            stepFinished: None,
+            componentEnvironment: std::ptr::null_mut(),
+        };
+        let guid = CString::new(GUID).unwrap();
+        unsafe {
+            let c = fmi2Instantiate(
+                c"t".as_ptr(),
+                1,
+                guid.as_ptr(),
+                std::ptr::null(),
+                &callbacks,
+                0,
+                0,
+            );
+            assert!(!c.is_null());
+            // The same boundary every export goes through, around a failing body.
+            let status = with(c, "fmi2Test", |_| panic!("deliberate"));
+            assert_eq!(status, Status::Fatal as fmi2Status);
+            assert_eq!((*(c as *mut Component)).instance.phase(), Phase::Error);
+            // The instance survives and still answers (with an error: wrong state).
+            assert_eq!(fmi2DoStep(c, 0.0, 0.1, 1), ERROR);
+            fmi2FreeInstance(c);
+            // NULL components are refused, never dereferenced.
+            assert_eq!(fmi2DoStep(std::ptr::null_mut(), 0.0, 0.1, 1), ERROR);
+            assert!(fmi2Instantiate(
+                c"t".as_ptr(),
+                0,
+                guid.as_ptr(),
+                std::ptr::null(),
+                &callbacks,
+                0,
+                0
+            )
+            .is_null());
+        }
+    }
+}

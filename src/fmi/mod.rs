@@ -1,0 +1,14 @@
+//! The FMU: the FMI 2.0 layer over the physics. It knows the variables and
+//! the FMI state machine, nothing of friction beyond the variable table.
+//!
+//! - [`c_api`]: the exported C functions (thin, panic-safe wrappers).
+//! - [`instance`]: one FMU instance as safe Rust: the FMI state machine.
+//! - [`variables`]: the variable table (names, value references, starts).
+//! - [`model_description`]: `modelDescription.xml`, generated from the table.
+//! - [`ports`]: the outputs' input dependencies and time derivatives.
+
+pub mod c_api;
+pub mod instance;
+pub mod model_description;
+pub mod ports;
+pub mod variables;
