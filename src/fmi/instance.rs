@@ -4,12 +4,12 @@
 //! only checks pointers, converts arguments and calls in here.
 
 use crate::engine::{Excitation, Outputs};
-use crate::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
 use crate::fmi::ports;
+use crate::fmi::variables::{Causality, Id};
+use crate::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
 use crate::record::{self, GroundMotion};
 use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
-use crate::fmi::variables::{Causality, Id};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
