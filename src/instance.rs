@@ -4,6 +4,7 @@
 //! only checks pointers, converts arguments and calls in here.
 
 use crate::engine::{Excitation, Outputs};
+use crate::limits::{self, MAX_PATH_BYTES};
 use crate::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
 use crate::record::{self, GroundMotion};
 use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
@@ -271,6 +272,9 @@ impl Instance {
         )
         .map_err(|e| self.error(func, e.to_string()))?;
         self.load_record(func)?;
+        if let Some(message) = non_finite_message(&sim.outputs(), self.d.start_time) {
+            return Err(self.error(func, message));
+        }
         self.d.sim = Some(sim);
         self.outputs = None;
         Ok(())
@@ -465,6 +469,15 @@ impl Instance {
                 Err(s) => return s,
             };
             match id {
+                Id::RecordFile if x.len() > MAX_PATH_BYTES => {
+                    return self.error(
+                        F,
+                        format!(
+                            "recordFile of {} bytes is not allowed: it must be a path of at most {MAX_PATH_BYTES} bytes",
+                            x.len()
+                        ),
+                    )
+                }
                 Id::RecordFile => self.d.values.record_file = x.clone(),
                 _ => return self.error(F, format!("{} is not a String", name_of(id))),
             }
@@ -695,6 +708,16 @@ impl Instance {
         };
         let sim = self.d.sim.as_mut().expect("built at initialization");
         let t_end = (t + h - self.d.start_time).max(sim.time());
+        // Bounded work: refuse up front what would run for minutes or more.
+        let samples = self
+            .record
+            .as_ref()
+            .map_or(0, |(_, gm)| gm.samples_in(sim.time(), t_end));
+        if let Some(message) =
+            limits::work_error(t_end - sim.time(), sim.max_internal_step(), samples)
+        {
+            return self.error(F, message);
+        }
         let result = match &self.record {
             Some((_, gm)) => {
                 record::advance_with_record(sim, t_end, gm, self.d.values.record_scale, &extra)
@@ -704,14 +727,20 @@ impl Instance {
         self.outputs = None;
         self.d.der_ag = 0.0;
         self.d.der_fext = 0.0;
-        match result {
-            Ok(()) => {
+        // Never fmi2OK with a NaN or an infinity in an output.
+        let outputs = sim.outputs();
+        let bad = non_finite_message(&outputs, self.d.start_time);
+        match (result, bad) {
+            (Ok(()), None) => {
                 self.d.time = t + h;
+                self.outputs = Some(outputs);
                 Status::Ok
             }
-            Err(e) => {
+            (result, bad) => {
                 self.d.phase = Phase::Error;
-                self.error(F, e.to_string())
+                let message =
+                    bad.unwrap_or_else(|| result.err().map(|e| e.to_string()).unwrap_or_default());
+                self.error(F, message)
             }
         }
     }
@@ -852,6 +881,18 @@ impl Instance {
 
 fn name_of(id: Id) -> String {
     id.name()
+}
+
+/// The error for outputs holding a NaN or an infinity: the first such
+/// variable, its value and the time.
+fn non_finite_message(o: &Outputs, start_time: f64) -> Option<String> {
+    limits::first_non_finite(o).map(|(name, x)| {
+        format!(
+            "{name} = {x} at t = {} s: the state or an output left the finite numbers \
+             (inputs or parameters too large for this scene)",
+            start_time + o.t
+        )
+    })
 }
 
 /// What a parsed record depends on: the file (path, size, modification time)

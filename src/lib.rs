@@ -8,6 +8,7 @@
 //!   of a consistent mode at an instant.
 //! - [`engine`]: RK4 with located events, peaks and energies.
 //! - [`record`]: ground-motion files and driving a simulation through one.
+//! - [`limits`]: the bounds that keep an instance safe inside its host process.
 //! - [`regularized`]: tanh-regularized friction with plain RK4, a baseline.
 //! - [`solver`]: the FMU's three solver choices behind one type.
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
@@ -19,6 +20,7 @@ pub mod engine;
 pub mod fmi2;
 pub mod hermite;
 pub mod instance;
+pub mod limits;
 pub mod mode;
 pub mod model_description;
 pub mod params;
