@@ -140,7 +140,42 @@ impl RegularizedSimulator {
         s.peak_a0 = r.f64()?;
         s.fext_now = r.f64()?;
         s.sign_changes = r.u64()?;
+        s.check_restored()?;
         Ok(s)
+    }
+
+    /// Refuses a restored state that could hang, fail or give non-finite
+    /// outputs: a step outside `[1e-7 s, stability bound]`, a non-finite
+    /// value, a negative time or peak, or motion beyond the stack.
+    fn check_restored(&self) -> Result<(), SnapshotError> {
+        let n = self.sys.n;
+        let stable = stable_step(&self.sys, self.eps).0;
+        if !(self.step >= crate::params::MIN_MAX_STEP && self.step <= stable) {
+            return Err(format!(
+                "internal step {} s of the saved state is outside [1e-7, {stable:e}] s",
+                self.step
+            ));
+        }
+        let finite = [self.t, self.peak_u0, self.peak_a0, self.fext_now]
+            .into_iter()
+            .chain(self.y)
+            .chain(self.peak_slip)
+            .all(f64::is_finite);
+        if !finite || self.t < 0.0 {
+            return Err("a value of the saved state is not finite, or its time is negative".into());
+        }
+        let peaks = [self.peak_u0, self.peak_a0]
+            .into_iter()
+            .chain(self.peak_slip);
+        if peaks.into_iter().any(|p| p < 0.0) {
+            return Err("a peak of the saved state is negative".into());
+        }
+        let beyond = (n + 1..MAX_BODIES)
+            .any(|i| self.y[i] != 0.0 || self.y[MAX_BODIES + i] != 0.0 || self.peak_slip[i] != 0.0);
+        if beyond || self.peak_slip[0] != 0.0 {
+            return Err("the saved state has motion beyond its stack".into());
+        }
+        Ok(())
     }
 
     /// Current time (s).
