@@ -496,7 +496,12 @@ impl Instance {
             self.build(func)?;
         }
         if self.outputs.is_none() {
-            self.outputs = Some(self.d.sim.as_ref().expect("built above").outputs());
+            let outputs = self.d.sim.as_ref().expect("built above").outputs();
+            // After a failed step the state may hold a NaN: never read as OK.
+            if let Some(message) = non_finite_message(&outputs, self.d.start_time) {
+                return Err(self.error(func, message));
+            }
+            self.outputs = Some(outputs);
         }
         Ok(self.outputs.as_ref().expect("set above"))
     }

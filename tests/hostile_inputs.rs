@@ -415,8 +415,8 @@ fn what_the_existing_uses_need_stays_allowed() {
 
 #[test]
 fn non_finite_results_are_an_error_naming_the_variable_and_time() {
-    // recordScale at its largest on a record of 1e6 m/s2 is finite; an
-    // input of 1e300 m/s2 overflows the energies.
+    // An input of 1e300 m/s2 overflows the energies: fmi2Error naming the
+    // first non-finite output and the time.
     let (mut inst, log, status) = init(|inst| {
         set(inst, Id::Ag, 1e300);
     });
@@ -431,6 +431,29 @@ fn non_finite_results_are_an_error_naming_the_variable_and_time() {
         "{m}"
     );
     assert_eq!(inst.phase(), Phase::Error);
+    // Reading the outputs afterwards is an error too, not NaN behind fmi2OK.
+    let mut out = [0.0];
+    assert_eq!(inst.get_real(&[Id::Einput.vr()], &mut out), Status::Error);
+    assert!(log.last().starts_with("fmi2GetReal: "), "{}", log.last());
+    // The largest record values at the largest recordScale stay finite.
+    let file = temp_dir().join("loud.csv");
+    std::fs::write(
+        &file,
+        "0,0
+0.01,1e6
+0.02,-1e6
+0.03,0
+",
+    )
+    .unwrap();
+    let (mut inst, log, status) = init(|inst| {
+        set(inst, Id::RecordScale, 1e3);
+        set(inst, Id::Tp, 1e3);
+        inst.set_string(&[Id::RecordFile.vr()], &[file.display().to_string()]);
+    });
+    assert_eq!(status, Status::Ok, "{}", log.last());
+    assert_eq!(inst.do_step(0.0, 1.0), Status::Ok, "{}", log.last());
+    assert_outputs_finite(&mut inst, "loudest record");
     // A force that overflows the acceleration at initialization.
     let (_, log, status) = init(|inst| {
         set(inst, Id::Mp, 1e-3);
