@@ -718,9 +718,12 @@ impl Instance {
             .record
             .as_ref()
             .map_or(0, |(_, gm)| gm.samples_in(sim.time(), t_end));
-        if let Some(message) =
-            limits::work_error(t_end - sim.time(), sim.max_internal_step(), samples)
-        {
+        if let Some(message) = limits::work_error(
+            t_end - sim.time(),
+            sim.max_internal_step(),
+            samples,
+            sim.step_weight(),
+        ) {
             return self.error(F, message);
         }
         let result = match &self.record {

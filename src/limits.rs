@@ -24,10 +24,18 @@ pub const MAX_RECORD_ACCEL: f64 = 1e6;
 pub const MAX_PATH_BYTES: usize = 4096;
 /// Most characters of a file's content a message quotes.
 pub const MAX_QUOTE_CHARS: usize = 24;
-/// Most internal steps one call may take (one `fmi2DoStep`, one
-/// `advance`): a few seconds of work for the exact engine, which takes
-/// about 30 ns per step. Record samples in the interval count as steps.
+/// Most internal steps one call may take (one `fmi2DoStep`): a few seconds
+/// of work for the exact engine, which takes 30-70 ns per step. Record
+/// samples in the interval count as steps; a step of solver 3 counts as
+/// [`regularized_step_weight`] steps.
 pub const MAX_STEPS_PER_CALL: f64 = 1e8;
+
+/// What one internal step of solver 3 costs in steps of the exact engine:
+/// it evaluates every interface's `tanh` 6 times a step (four RK4 stages and
+/// the peaks); measured about 260 ns a step with 1 block, 2.4 us with 8.
+pub fn regularized_step_weight(n_blocks: usize) -> f64 {
+    6.0 * (n_blocks + 1) as f64
+}
 
 /// At most [`MAX_QUOTE_CHARS`] characters of `text` between backquotes,
 /// control characters shown as `?`, `...` when cut.
@@ -45,14 +53,20 @@ pub fn quote(text: &str) -> String {
 
 /// The error of a call that would need more than [`MAX_STEPS_PER_CALL`]
 /// internal steps, or `None` when it fits. `length` is the interval (s),
-/// `h_max` the largest internal step, `samples` the record samples inside.
-pub fn work_error(length: f64, h_max: f64, samples: usize) -> Option<String> {
+/// `h_max` the largest internal step, `samples` the record samples inside,
+/// `weight` the cost of one internal step in exact-engine steps.
+pub fn work_error(length: f64, h_max: f64, samples: usize, weight: f64) -> Option<String> {
     let steps = length / h_max + samples as f64;
-    (steps > MAX_STEPS_PER_CALL).then(|| {
+    (steps * weight > MAX_STEPS_PER_CALL).then(|| {
+        let counted = if weight == 1.0 {
+            String::new()
+        } else {
+            format!(", each counted as {weight} for solver 3")
+        };
         format!(
             "stepping {length} s would take about {steps:.3e} internal steps \
-             (internal step {h_max:.3e} s, {samples} record samples), more than the \
-             limit of {MAX_STEPS_PER_CALL:e} per call: split it into shorter \
+             (internal step {h_max:.3e} s, {samples} record samples{counted}), more than \
+             the limit of {MAX_STEPS_PER_CALL:e} per call: split it into shorter \
              communication steps, or raise maxStep"
         )
     })
@@ -109,10 +123,14 @@ mod tests {
 
     #[test]
     fn work_beyond_the_limit_is_named() {
-        assert!(work_error(20.0, 1e-3, 4000).is_none());
-        let e = work_error(1.0, 1e-12, 0).unwrap();
+        assert!(work_error(20.0, 1e-3, 4000, 1.0).is_none());
+        let e = work_error(1.0, 1e-12, 0, 1.0).unwrap();
         assert!(e.contains("1.000e12 internal steps"), "{e}");
-        assert!(work_error(0.0, 1e-3, MAX_RECORD_SAMPLES).is_none());
+        assert!(work_error(0.0, 1e-3, MAX_RECORD_SAMPLES, 1.0).is_none());
+        // Solver 3 with 8 blocks: 54 times the cost of a step.
+        assert!(work_error(100.0, 1e-4, 0, 1.0).is_none());
+        let e = work_error(100.0, 1e-4, 0, regularized_step_weight(8)).unwrap();
+        assert!(e.contains("each counted as 54 for solver 3"), "{e}");
     }
 
     #[test]

@@ -167,6 +167,15 @@ impl Solver {
         }
     }
 
+    /// The cost of one internal step in steps of the exact engine (the
+    /// work bound of [`crate::limits`]).
+    pub fn step_weight(&self) -> f64 {
+        match self {
+            Solver::Exact(_) => 1.0,
+            Solver::Regularized(s) => crate::limits::regularized_step_weight(s.params().n_blocks),
+        }
+    }
+
     /// All reported quantities at the current time.
     pub fn outputs(&self) -> Outputs {
         match self {

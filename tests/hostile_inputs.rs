@@ -145,7 +145,16 @@ fn in_child(case: &str, limit: Duration) {
         status.success(),
         "case `{case}` ended with {status}:\n{err}"
     );
-    eprintln!("case `{case}`: {:.2} s", started.elapsed().as_secs_f64());
+    // The child's own summary lines (they start with a count).
+    let summary: Vec<&str> = err
+        .lines()
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+        .collect();
+    eprintln!(
+        "case `{case}`: {:.2} s {}",
+        started.elapsed().as_secs_f64(),
+        summary.join("; ")
+    );
 }
 
 /// The entry point of the child processes (does nothing in a normal run).
@@ -229,8 +238,8 @@ fn run_case(case: &str) {
             assert_eq!(inst.do_step(0.0, 0.05), Status::Ok, "{}", log.last());
             assert_outputs_finite(&mut inst, "stiff solver 3");
         }
-        "fuzz_states" => fuzz_saved_states(fuzz_cases(3000)),
-        "fuzz_calls" => fuzz_call_sequences(fuzz_cases(3000)),
+        "fuzz_states" => fuzz_saved_states(fuzz_cases(2000)),
+        "fuzz_calls" => fuzz_call_sequences(fuzz_cases(2000)),
         other => panic!("unknown case {other}"),
     }
 }
@@ -752,9 +761,11 @@ fn fuzz_call_sequences(cases: usize) {
 
 #[test]
 fn fuzz_saved_states_and_call_sequences_in_a_child() {
-    // About 3000 cases each; a hang is caught by the time limit.
-    in_child("fuzz_states", Duration::from_secs(300));
-    in_child("fuzz_calls", Duration::from_secs(300));
+    // 2000 cases each (about 10 s and 20 s); a hang is caught by the time
+    // limit, which grows with SLL_FUZZ_CASES.
+    let limit = Duration::from_secs(300 * (fuzz_cases(2000) as u64).div_ceil(2000));
+    in_child("fuzz_states", limit);
+    in_child("fuzz_calls", limit);
 }
 
 #[test]
