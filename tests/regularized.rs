@@ -138,9 +138,11 @@ fn solver_3_steps_within_the_stability_bound_of_the_whole_stack() {
         for eps in [1e-2, 1e-3, 1e-4] {
             for n in 1..=8 {
                 for tp in [0.2, 1.0] {
-                    let mut p = Params::default();
-                    p.n_blocks = n;
-                    p.tp = tp;
+                    let p = Params {
+                        n_blocks: n,
+                        tp,
+                        ..Params::default()
+                    };
                     let mut s = Solver::new(&p, SolverKind::Regularized, 0.0, eps).unwrap();
                     let bound = stable_step(&System::new(&p).unwrap(), eps).0;
                     assert!(s.max_internal_step() <= bound);
@@ -160,8 +162,10 @@ fn solver_3_steps_within_the_stability_bound_of_the_whole_stack() {
     // The bound is that of the linearized stack: just above it plain RK4
     // is unstable on the steep part of the tanh law (bounded by the
     // saturation, it shows as a wrong energy balance), at it it is not.
-    let mut p = Params::default();
-    p.n_blocks = 8;
+    let p = Params {
+        n_blocks: 8,
+        ..Params::default()
+    };
     let sys = System::new(&p).unwrap();
     let eps = 1e-3;
     let h = stable_step(&sys, eps).0;
