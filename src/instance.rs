@@ -13,6 +13,9 @@ use crate::variables::{Causality, Id};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+mod saved_state;
+use saved_state::check_saved;
+
 /// FMI 2.0 status codes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 #[repr(i32)]
@@ -272,7 +275,7 @@ impl Instance {
         )
         .map_err(|e| self.error(func, e.to_string()))?;
         self.load_record(func)?;
-        if let Some(message) = non_finite_message(&sim.outputs(), self.d.start_time) {
+        if let Some(message) = limits::non_finite_message(&sim.outputs(), self.d.start_time) {
             return Err(self.error(func, message));
         }
         self.d.sim = Some(sim);
@@ -498,7 +501,7 @@ impl Instance {
         if self.outputs.is_none() {
             let outputs = self.d.sim.as_ref().expect("built above").outputs();
             // After a failed step the state may hold a NaN: never read as OK.
-            if let Some(message) = non_finite_message(&outputs, self.d.start_time) {
+            if let Some(message) = limits::non_finite_message(&outputs, self.d.start_time) {
                 return Err(self.error(func, message));
             }
             self.outputs = Some(outputs);
@@ -737,7 +740,7 @@ impl Instance {
         self.d.der_fext = 0.0;
         // Never fmi2OK with a NaN or an infinity in an output.
         let outputs = sim.outputs();
-        let bad = non_finite_message(&outputs, self.d.start_time);
+        let bad = limits::non_finite_message(&outputs, self.d.start_time);
         match (result, bad) {
             (Ok(()), None) => {
                 self.d.time = t + h;
@@ -890,107 +893,8 @@ impl Instance {
     }
 }
 
-/// Every field of a deserialized state, beyond what the engine checks of its
-/// own: times, parameters in range, a solver that is the one its parameters
-/// build, finite inputs and outputs (docs/robustness.md, "Saved states").
-fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
-    if d.phase == Phase::Error {
-        return Err("a saved state is never in the Error state".into());
-    }
-    let stop_ok = d
-        .stop_time
-        .is_none_or(|stop| stop.is_finite() && stop >= d.start_time);
-    let tol = 1e-9 * d.time.abs().max(1.0);
-    let time_ok = d.start_time.is_finite()
-        && d.time.is_finite()
-        && d.time >= d.start_time
-        && d.stop_time.is_none_or(|stop| d.time <= stop + tol);
-    if !(stop_ok && time_ok) {
-        return Err(format!(
-            "times of the saved state are not consistent: startTime {}, stopTime {:?}, time {}",
-            d.start_time, d.stop_time, d.time
-        ));
-    }
-    let v = &d.values;
-    if v.record_file.len() > MAX_PATH_BYTES {
-        return Err("the saved recordFile is longer than a path".into());
-    }
-    if SolverKind::from_code(v.solver).is_none() {
-        return Err(format!("solver {} of the saved state is unknown", v.solver));
-    }
-    for (name, x) in [
-        ("recordScale", v.record_scale),
-        ("maxStep", v.max_step),
-        ("frictionEps", v.friction_eps),
-    ] {
-        check_scalar(name, x).map_err(|e| format!("saved parameter {e}"))?;
-    }
-    if ![d.ag, d.fext, d.der_ag, d.der_fext]
-        .iter()
-        .all(|x| x.is_finite())
-    {
-        return Err("a saved input is not finite".into());
-    }
-    let Some(sim) = &d.sim else {
-        if d.phase == Phase::StepComplete {
-            return Err("a saved state ready to step has no simulator".into());
-        }
-        // Before initialization each value was checked as it was set; the
-        // cross-field rules wait for fmi2ExitInitializationMode.
-        let p = &v.params;
-        if p.n_blocks > MAX_BLOCKS {
-            return Err(format!(
-                "nBlocks {} of the saved state is above 8",
-                p.n_blocks
-            ));
-        }
-        let scalars = [("mp", p.mp), ("Tp", p.tp), ("zeta", p.zeta), ("g", p.g)];
-        for (name, x) in scalars.into_iter().chain(
-            (0..MAX_BLOCKS)
-                .flat_map(|j| [("alpha", p.alpha[j]), ("mus", p.mus[j]), ("muk", p.muk[j])]),
-        ) {
-            check_scalar(name, x).map_err(|e| format!("saved parameter {e}"))?;
-        }
-        return Ok(());
-    };
-    let fresh = v.build().map_err(|e| format!("saved parameter {e}"))?;
-    let same_solver = match (sim, &fresh) {
-        (Solver::Exact(a), Solver::Exact(b)) => a.settings() == b.settings(),
-        (Solver::Regularized(a), Solver::Regularized(b)) => {
-            a.eps().to_bits() == b.eps().to_bits() && a.step().to_bits() == b.step().to_bits()
-        }
-        _ => false,
-    };
-    if !same_solver {
-        return Err("the saved simulator is not the one its saved parameters build".into());
-    }
-    if (d.start_time + sim.time() - d.time).abs() > tol {
-        return Err(format!(
-            "the saved simulator's time {} does not match the saved time {}",
-            sim.time(),
-            d.time - d.start_time
-        ));
-    }
-    if let Some(message) = non_finite_message(&sim.outputs(), d.start_time) {
-        return Err(format!("saved state: {message}"));
-    }
-    Ok(())
-}
-
 fn name_of(id: Id) -> String {
     id.name()
-}
-
-/// The error for outputs holding a NaN or an infinity: the first such
-/// variable, its value and the time.
-fn non_finite_message(o: &Outputs, start_time: f64) -> Option<String> {
-    limits::first_non_finite(o).map(|(name, x)| {
-        format!(
-            "{name} = {x} at t = {} s: the state or an output left the finite numbers \
-             (inputs or parameters too large for this scene)",
-            start_time + o.t
-        )
-    })
 }
 
 /// What a parsed record depends on: the file (path, size, modification time)

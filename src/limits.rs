@@ -108,6 +108,18 @@ pub fn first_non_finite(o: &Outputs) -> Option<(String, f64)> {
     None
 }
 
+/// The error for outputs holding a NaN or an infinity: the first such
+/// variable, its value and the time.
+pub fn non_finite_message(o: &Outputs, start_time: f64) -> Option<String> {
+    first_non_finite(o).map(|(name, x)| {
+        format!(
+            "{name} = {x} at t = {} s: the state or an output left the finite numbers \
+             (inputs or parameters too large for this scene)",
+            start_time + o.t
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -128,8 +140,8 @@ mod tests {
         assert!(e.contains("1.000e12 internal steps"), "{e}");
         assert!(work_error(0.0, 1e-3, MAX_RECORD_SAMPLES, 1.0).is_none());
         // Solver 3 with 8 blocks: 54 times the cost of a step.
-        assert!(work_error(100.0, 1e-4, 0, 1.0).is_none());
-        let e = work_error(100.0, 1e-4, 0, regularized_step_weight(8)).unwrap();
+        assert!(work_error(1000.0, 1e-4, 0, 1.0).is_none());
+        let e = work_error(1000.0, 1e-4, 0, regularized_step_weight(8)).unwrap();
         assert!(e.contains("each counted as 54 for solver 3"), "{e}");
     }
 
