@@ -26,8 +26,8 @@ pub const MAX_PATH_BYTES: usize = 4096;
 pub const MAX_QUOTE_CHARS: usize = 24;
 /// Most internal steps one call may take (one `fmi2DoStep`): a few seconds
 /// of work for the exact engine, which takes 30-70 ns per step. Record
-/// samples in the interval count as steps; a step of solver 3 counts as
-/// [`regularized_step_weight`] steps.
+/// samples in the interval count as steps; a step of solver 2 counts as 3,
+/// one of solver 3 as [`regularized_step_weight`].
 pub const MAX_STEPS_PER_CALL: f64 = 1e8;
 
 /// What one internal step of solver 3 costs in steps of the exact engine:
@@ -61,7 +61,7 @@ pub fn work_error(length: f64, h_max: f64, samples: usize, weight: f64) -> Optio
         let counted = if weight == 1.0 {
             String::new()
         } else {
-            format!(", each counted as {weight} for solver 3")
+            format!(", each counted as {weight} for its solver's cost")
         };
         format!(
             "stepping {length} s would take about {steps:.3e} internal steps \
@@ -142,7 +142,7 @@ mod tests {
         // Solver 3 with 8 blocks: 54 times the cost of a step.
         assert!(work_error(1000.0, 1e-4, 0, 1.0).is_none());
         let e = work_error(1000.0, 1e-4, 0, regularized_step_weight(8)).unwrap();
-        assert!(e.contains("each counted as 54 for solver 3"), "{e}");
+        assert!(e.contains("each counted as 54 for its solver"), "{e}");
     }
 
     #[test]
