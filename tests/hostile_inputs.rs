@@ -242,6 +242,8 @@ fn run_case(case: &str) {
         "fuzz_calls" => fuzz_call_sequences(fuzz_cases(2000)),
         other => panic!("unknown case {other}"),
     }
+    // The child's own folder (its process id): nothing else uses it.
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -578,7 +580,7 @@ fn random_instance(rng: &mut Rng, dir: &Path) -> Instance {
         set(&mut inst, Id::Muk(j), mu);
     }
     if rng.below(2) == 0 {
-        let seed = rng.below(1 << 20);
+        let seed = rng.below(16);
         let file = dir.join(format!("fuzz_{seed}.csv"));
         if !file.exists() {
             let gm = stacked_live_load::synthetic::broadband(4.0, 0.01, rng.uniform(1.0, 8.0));
@@ -769,7 +771,7 @@ fn fuzz_saved_states_and_call_sequences_in_a_child() {
 }
 
 #[test]
-fn every_field_of_a_saved_state_is_checked() {
+fn a_sweep_over_every_offset_of_a_saved_state_never_panics_or_gives_nan() {
     // A sweep of one stepped state: the 8 bytes at every offset set to NaN,
     // to 1e300 and to -1 in turn. Nothing panics, and whatever is accepted
     // steps to fmi2Error or to finite outputs (`try_blob`). (Most offsets
