@@ -15,6 +15,7 @@ use crate::system::System;
 
 mod lean;
 mod rk4_map;
+mod state_check;
 
 /// Excitation over one interval, linear in time from the interval start:
 /// `ag(t) = ag + ag_rate (t - t_start)`, and likewise the external force.
@@ -1076,6 +1077,7 @@ impl Simulator {
                 x => return Err(format!("unknown contact state {x} in the saved state")),
             };
         }
+        sim.check_restored_contacts()?;
         sim.dynamics = Dynamics::new(&sim.sys, &sim.mode);
         sim.peak_u0 = r.f64()?;
         r.f64s(&mut sim.peak_slip)?;
@@ -1089,6 +1091,7 @@ impl Simulator {
             muted: r.u64()?,
             ambiguous: r.u64()?,
         };
+        sim.check_restored()?;
         Ok(sim)
     }
 

@@ -8,6 +8,7 @@
 //!   of a consistent mode at an instant.
 //! - [`engine`]: RK4 with located events, peaks and energies.
 //! - [`record`]: ground-motion files and driving a simulation through one.
+//! - [`limits`]: the bounds that keep an instance safe inside its host process.
 //! - [`regularized`]: tanh-regularized friction with plain RK4, a baseline.
 //! - [`ports`]: outputs and their derivatives as a coupling master sees them.
 //! - [`solver`]: the FMU's three solver choices behind one type.
@@ -19,6 +20,7 @@
 pub mod engine;
 pub mod fmi;
 pub mod hermite;
+pub mod limits;
 pub mod mode;
 pub mod params;
 pub mod record;

@@ -61,7 +61,7 @@ pub struct ParamError {
     /// The value given.
     pub value: f64,
     /// The allowed range, in words.
-    pub allowed: &'static str,
+    pub allowed: String,
 }
 
 impl fmt::Display for ParamError {
@@ -83,24 +83,53 @@ fn check(field: &str, value: f64, ok: bool, allowed: &'static str) -> Result<(),
         Err(ParamError {
             field: field.to_string(),
             value,
-            allowed,
+            allowed: allowed.to_string(),
         })
     }
 }
+
+/// The allowed range of each scalar field: a physical range wide enough for
+/// any real scene that keeps the work of a simulation finite and every
+/// derived quantity (stiffness, normal forces, energies) far from overflow.
+/// `(name, low, high, in words)`; both ends are included unless the words say
+/// otherwise. See `docs/robustness.md`.
+pub const RANGES: [(&str, f64, f64, &str); 13] = [
+    ("mp", 1e-3, 1e12, "finite, from 1e-3 to 1e12 (kg)"),
+    ("Tp", 1e-3, 1e3, "finite, from 1e-3 to 1e3 (s)"),
+    ("zeta", 0.0, 1.0, "finite, >= 0 and < 1"),
+    ("g", 1e-3, 1e3, "finite, from 1e-3 to 1e3 (m/s2)"),
+    ("alpha", 1e-9, 1e9, "finite, from 1e-9 to 1e9"),
+    ("mus", 0.0, 1e9, "finite, from 0 to 1e9"),
+    ("muk", 0.0, 1e9, "finite, from 0 to 1e9"),
+    ("frictionEps", 1e-7, 1e3, "finite, from 1e-7 to 1e3 (m/s)"),
+    ("recordScale", -1e3, 1e3, "finite, from -1e3 to 1e3"),
+    // Inputs: far beyond any physical value, and low enough that no energy
+    // or displacement they cause can overflow within the work bound.
+    ("ag", -1e6, 1e6, "finite, from -1e6 to 1e6 (m/s2)"),
+    ("Fext", -1e18, 1e18, "finite, from -1e18 to 1e18 (N)"),
+    ("der(ag)", -1e9, 1e9, "finite, from -1e9 to 1e9 (m/s3)"),
+    ("der(Fext)", -1e21, 1e21, "finite, from -1e21 to 1e21 (N/s)"),
+];
+
+/// Smallest positive `maxStep` (s); 0 selects the automatic step.
+pub const MIN_MAX_STEP: f64 = 1e-7;
 
 /// The range of one scalar field, by its public name (`alpha[2]` is checked
 /// as `alpha`). Cross-field rules (muk <= mus) are in [`Params::validate`].
 pub fn check_scalar(field: &str, value: f64) -> Result<(), ParamError> {
     let base = field.split('[').next().unwrap_or(field);
-    let (ok, allowed) = match base {
-        "mp" | "Tp" | "g" | "alpha" => (value > 0.0, "finite and > 0"),
-        "zeta" => ((0.0..1.0).contains(&value), "finite, >= 0 and < 1"),
-        "mus" | "muk" => (value >= 0.0, "finite and >= 0"),
-        "maxStep" => (value >= 0.0, "finite and >= 0 (0 = automatic)"),
-        "frictionEps" => (value > 0.0, "finite and > 0"),
-        _ => (true, "finite"),
-    };
-    check(field, value, ok, allowed)
+    if base == "maxStep" {
+        let ok = value == 0.0 || value >= MIN_MAX_STEP;
+        return check(field, value, ok, "0 (automatic) or finite and >= 1e-7 (s)");
+    }
+    match RANGES.iter().find(|r| r.0 == base) {
+        // zeta = 1 is critical damping: excluded.
+        Some(&(_, lo, hi, allowed)) => {
+            let ok = value >= lo && (value < hi || (value == hi && base != "zeta"));
+            check(field, value, ok, allowed)
+        }
+        None => check(field, value, true, "finite"),
+    }
 }
 
 impl Params {
@@ -110,7 +139,7 @@ impl Params {
             return Err(ParamError {
                 field: "nBlocks".into(),
                 value: self.n_blocks as f64,
-                allowed: "an integer from 0 to 8",
+                allowed: "an integer from 0 to 8".into(),
             });
         }
         for (name, value) in [
@@ -193,6 +222,15 @@ mod tests {
         let mut p = Params::default();
         p.zeta = f64::NAN;
         assert_eq!(p.validate().unwrap_err().field, "zeta");
+        for (field, value) in [("Tp", 5e-324), ("Tp", 1e-9), ("mp", 1e300), ("g", 0.0)] {
+            let e = check_scalar(field, value).unwrap_err();
+            assert!(e.to_string().contains("from 1e-3"), "{e}");
+        }
+        assert!(check_scalar("maxStep", 1e-12).is_err());
+        assert!(check_scalar("maxStep", 0.0).is_ok());
+        assert!(check_scalar("recordScale", 1e200).is_err());
+        assert!(check_scalar("recordScale", -2.0).is_ok());
+        assert!(check_scalar("mus[3]", 1e6).is_ok());
         let mut p = Params::default();
         p.n_blocks = 9;
         assert_eq!(p.validate().unwrap_err().field, "nBlocks");

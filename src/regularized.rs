@@ -5,6 +5,8 @@
 //! approach many codes use; its error has a floor of O(eps), it makes the
 //! equations stiff (eigenvalues about mu g (1 + alpha) / eps), and without
 //! a step bound RK4 diverges above h omega = 2.83 (RESEARCH.md §2).
+//! [`stable_step`] gives the bound for a whole stack; the FMU's solver 3
+//! never steps above it (see [`crate::solver::Solver::new`]).
 
 use crate::engine::{Excitation, Outputs, SimError};
 use crate::hermite;
@@ -14,6 +16,47 @@ use crate::system::System;
 
 /// Full state: u and v of every body, then input, viscous and friction work.
 const STATE: usize = 2 * MAX_BODIES + 3;
+
+/// RK4 step margin: plain RK4 is stable on the negative real axis to
+/// `h |lambda| = 2.785` and on the imaginary axis to 2.83; the half-disk of
+/// radius 2.5 in the left half-plane lies inside its stability region
+/// (|R(z)| <= 0.873 on its edge).
+pub const STABLE_H_LAMBDA: f64 = 2.5;
+
+/// Largest stable RK4 step (s) of the regularized scene, and the interface
+/// whose friction is the stiffest (0 when the structure's own frequency or
+/// damping binds). Linearized at zero relative velocity (where tanh is
+/// steepest), the system is `M u'' + (C + B^T D B) u' + K u = f`, with
+/// `D_j = muk_j N_j / eps` per interface; every eigenvalue `s` of its
+/// first-order form obeys `|s| <= max(omega_p, lambda_max)` with
+/// `lambda_max` the largest eigenvalue of `M^-1/2 (C + B^T D B) M^-1/2`
+/// (real roots lie in `[-lambda_max, 0]`, complex ones have `|s|^2 <=
+/// omega_p^2`), so `h = 2.5 / max(omega_p, lambda_max)` keeps every one in
+/// the half-disk where RK4 is stable.
+pub fn stable_step(sys: &System, eps: f64) -> (f64, usize) {
+    let n = sys.n;
+    let mut a = nalgebra::DMatrix::<f64>::zeros(n + 1, n + 1);
+    a[(0, 0)] = sys.c;
+    let mut stiffest = (sys.omega_p.max(sys.c / sys.mass[0]), 0);
+    for j in 1..=n {
+        let d = sys.muk[j] * sys.normal[j] / eps;
+        a[(j - 1, j - 1)] += d;
+        a[(j, j)] += d;
+        a[(j - 1, j)] -= d;
+        a[(j, j - 1)] -= d;
+        let alone = d * (1.0 / sys.mass[j - 1] + 1.0 / sys.mass[j]);
+        if alone > stiffest.0 {
+            stiffest = (alone, j);
+        }
+    }
+    for r in 0..=n {
+        for c in 0..=n {
+            a[(r, c)] /= (sys.mass[r] * sys.mass[c]).sqrt();
+        }
+    }
+    let lambda = a.symmetric_eigenvalues().max().max(sys.omega_p);
+    (STABLE_H_LAMBDA / lambda, stiffest.1)
+}
 
 /// A scene with regularized friction.
 #[derive(Clone, Debug)]
@@ -35,7 +78,9 @@ pub struct RegularizedSimulator {
 
 impl RegularizedSimulator {
     /// `eps` (m/s) sets the regularization; `step` (s) is the internal step,
-    /// used as given (shortened only to end exactly at each excitation breakpoint).
+    /// used as given (shortened only to end exactly at each excitation
+    /// breakpoint), with no stability bound: a caller wanting one takes the
+    /// smaller of its step and [`stable_step`], as the FMU's solver 3 does.
     pub fn new(params: &Params, eps: f64, step: f64) -> Result<RegularizedSimulator, ParamError> {
         let sys = System::new(params)?;
         for (field, value) in [("frictionEps", eps), ("step", step)] {
@@ -43,7 +88,7 @@ impl RegularizedSimulator {
                 return Err(ParamError {
                     field: field.into(),
                     value,
-                    allowed: "finite and > 0",
+                    allowed: "finite and > 0".into(),
                 });
             }
         }
@@ -95,7 +140,42 @@ impl RegularizedSimulator {
         s.peak_a0 = r.f64()?;
         s.fext_now = r.f64()?;
         s.sign_changes = r.u64()?;
+        s.check_restored()?;
         Ok(s)
+    }
+
+    /// Refuses a restored state that could hang, fail or give non-finite
+    /// outputs: a step outside `[1e-7 s, stability bound]`, a non-finite
+    /// value, a negative time or peak, or motion beyond the stack.
+    fn check_restored(&self) -> Result<(), SnapshotError> {
+        let n = self.sys.n;
+        let stable = stable_step(&self.sys, self.eps).0;
+        if !(self.step >= crate::params::MIN_MAX_STEP && self.step <= stable) {
+            return Err(format!(
+                "internal step {} s of the saved state is outside [1e-7, {stable:e}] s",
+                self.step
+            ));
+        }
+        let finite = [self.t, self.peak_u0, self.peak_a0, self.fext_now]
+            .into_iter()
+            .chain(self.y)
+            .chain(self.peak_slip)
+            .all(f64::is_finite);
+        if !finite || self.t < 0.0 {
+            return Err("a value of the saved state is not finite, or its time is negative".into());
+        }
+        let peaks = [self.peak_u0, self.peak_a0]
+            .into_iter()
+            .chain(self.peak_slip);
+        if peaks.into_iter().any(|p| p < 0.0) {
+            return Err("a peak of the saved state is negative".into());
+        }
+        let beyond = (n + 1..MAX_BODIES)
+            .any(|i| self.y[i] != 0.0 || self.y[MAX_BODIES + i] != 0.0 || self.peak_slip[i] != 0.0);
+        if beyond || self.peak_slip[0] != 0.0 {
+            return Err("the saved state has motion beyond its stack".into());
+        }
+        Ok(())
     }
 
     /// Current time (s).
@@ -106,6 +186,21 @@ impl RegularizedSimulator {
     /// The external force now, as the last call left it (N).
     pub fn fext_now(&self) -> f64 {
         self.fext_now
+    }
+
+    /// The internal step (s).
+    pub fn step(&self) -> f64 {
+        self.step
+    }
+
+    /// The regularization velocity (m/s).
+    pub fn eps(&self) -> f64 {
+        self.eps
+    }
+
+    /// The derived physical constants.
+    pub fn system(&self) -> &System {
+        &self.sys
     }
 
     /// Friction force of interface j at relative velocity `v_rel`.

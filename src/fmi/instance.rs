@@ -6,12 +6,16 @@
 use crate::engine::{Excitation, Outputs};
 use crate::fmi::ports;
 use crate::fmi::variables::{Causality, Id};
+use crate::limits::{self, MAX_PATH_BYTES};
 use crate::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
 use crate::record::{self, GroundMotion};
 use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+mod saved_state;
+use saved_state::check_saved;
 
 /// FMI 2.0 status codes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -276,6 +280,9 @@ impl Instance {
         )
         .map_err(|e| self.error(func, e.to_string()))?;
         self.load_record(func)?;
+        if let Some(message) = limits::non_finite_message(&sim.outputs(), self.d.start_time) {
+            return Err(self.error(func, message));
+        }
         self.d.sim = Some(sim);
         self.outputs = None;
         Ok(())
@@ -396,12 +403,7 @@ impl Instance {
                 Ok(id) => id,
                 Err(s) => return s,
             };
-            let checked = match id.causality() {
-                Causality::Parameter => check_scalar(&name_of(id), x),
-                _ if x.is_finite() => Ok(()),
-                _ => check_scalar(&name_of(id), x),
-            };
-            if let Err(e) = checked {
+            if let Err(e) = check_scalar(&name_of(id), x) {
                 return self.param_error(F, e);
             }
             let v = &mut self.d.values;
@@ -472,6 +474,15 @@ impl Instance {
                 Err(s) => return s,
             };
             match id {
+                Id::RecordFile if x.len() > MAX_PATH_BYTES => {
+                    return self.error(
+                        F,
+                        format!(
+                            "recordFile of {} bytes is not allowed: it must be a path of at most {MAX_PATH_BYTES} bytes",
+                            x.len()
+                        ),
+                    )
+                }
                 Id::RecordFile => self.d.values.record_file = x.clone(),
                 _ => return self.error(F, format!("{} is not a String", name_of(id))),
             }
@@ -492,10 +503,15 @@ impl Instance {
         if self.outputs.is_none() {
             let exc = self.next_excitation();
             let sim = self.d.sim.as_ref().expect("built above");
-            match ports::outputs_at_step_start(sim, &exc) {
-                Ok(o) => self.outputs = Some(o),
+            let outputs = match ports::outputs_at_step_start(sim, &exc) {
+                Ok(o) => o,
                 Err(e) => return Err(self.error(func, e.to_string())),
+            };
+            // After a failed step the state may hold a NaN: never read as OK.
+            if let Some(message) = limits::non_finite_message(&outputs, self.d.start_time) {
+                return Err(self.error(func, message));
             }
+            self.outputs = Some(outputs);
         }
         Ok(self.outputs.as_ref().expect("set above"))
     }
@@ -713,14 +729,8 @@ impl Instance {
                     ),
                 );
             }
-            if !x.is_finite() {
-                return self.error(
-                    F,
-                    format!(
-                        "der({}) = {x} is not allowed: it must be finite",
-                        name_of(id)
-                    ),
-                );
+            if let Err(e) = check_scalar(&format!("der({})", name_of(id)), x) {
+                return self.param_error(F, e);
             }
             match id {
                 Id::Ag => self.d.der_ag = x,
@@ -767,6 +777,19 @@ impl Instance {
         let at_start = self.next_excitation();
         let sim = self.d.sim.as_mut().expect("built at initialization");
         let t_end = (t + h - self.d.start_time).max(sim.time());
+        // Bounded work: refuse up front what would run for minutes or more.
+        let samples = self
+            .record
+            .as_ref()
+            .map_or(0, |(_, gm)| gm.samples_in(sim.time(), t_end));
+        if let Some(message) = limits::work_error(
+            t_end - sim.time(),
+            sim.max_internal_step(),
+            samples,
+            sim.step_weight(),
+        ) {
+            return self.error(F, message);
+        }
         // A jump of an input acts at the communication point, where the
         // outputs already showed it: tSwitch watches for switches after it.
         let jump = if at_start.fext != sim.fext_now() {
@@ -786,8 +809,10 @@ impl Instance {
         self.outputs = None;
         let first_switch = sim.first_switch();
         let fext_end = sim.fext_now();
-        match result {
-            Ok(()) => {
+        // Never fmi2OK with a NaN or an infinity in an output.
+        let bad = limits::non_finite_message(&sim.outputs(), self.d.start_time);
+        match (result, bad) {
+            (Ok(()), None) => {
                 // The inputs stand where their slopes took them: the outputs
                 // at t + h see them there, and an input left alone is held at
                 // that value (Fext exactly as the engine ended the step, so
@@ -804,9 +829,11 @@ impl Instance {
                 };
                 Status::Ok
             }
-            Err(e) => {
+            (result, bad) => {
                 self.d.phase = Phase::Error;
-                self.error(F, e.to_string())
+                let message =
+                    bad.unwrap_or_else(|| result.err().map(|e| e.to_string()).unwrap_or_default());
+                self.error(F, message)
             }
         }
     }
@@ -851,6 +878,7 @@ impl Instance {
         self.outputs = None;
         if self.d.sim.is_some() {
             if let Err(s) = self.load_record(F) {
+                self.d.phase = Phase::Error;
                 return s;
             }
         }
@@ -932,7 +960,7 @@ impl Instance {
         if !r.is_empty() {
             return Err("the saved state has trailing bytes".into());
         }
-        Ok(SavedState(Dynamic {
+        let d = Dynamic {
             phase,
             start_time,
             stop_time: (!stop.is_nan()).then_some(stop),
@@ -944,7 +972,9 @@ impl Instance {
             der_ag,
             der_fext,
             sim,
-        }))
+        };
+        check_saved(&d)?;
+        Ok(SavedState(d))
     }
 }
 

@@ -36,25 +36,26 @@ def harmonic(tmp_path_factory) -> Path:
     return accuracy_speed.harmonic_record(tmp_path_factory.mktemp("records"))
 
 
-def test_plain_rk4_diverges_just_above_h_omega_2_83_and_not_below(model):
-    # Solver 3 takes exactly maxStep with no bound; with mu = 0 and zeta = 0 it is
-    # plain RK4 on the bare oscillator, whose amplification per step is
-    # |R(i y)| = sqrt(1 - y^6/72 + y^8/576): 0.93 at y = 2.80, 1.08 at y = 2.86.
+def test_solver_3_stays_below_its_rk4_stability_bound_whatever_maxstep(model):
+    # With mu = 0 and zeta = 0, solver 3 is RK4 on the bare oscillator, whose
+    # amplification per step is |R(i y)| = sqrt(1 - y^6/72 + y^8/576): 0.93 at
+    # y = h omega = 2.80, 1.08 at 2.86 (plain RK4 diverges there: 1.08^300 = 1e10,
+    # pinned in tests/regularized.rs). Issue 13: the FMU's solver 3 never steps
+    # above 2.5 / omega, so a maxStep beyond the limit stays bounded too.
     tp = 1.0
     omega = 2 * math.pi / tp
-    peaks = {}
-    for y in (2.80, 2.86):
+    for y in (2.80, 2.86, 10.0):
         h = y / omega
         ag = np.zeros(300)
         ag[0] = 1.0  # one kick, then free vibration
         params = {"nBlocks": 1, "Tp": tp, "zeta": 0.0, "mus[1]": 0.0, "muk[1]": 0.0,
                   "solver": 3, "maxStep": h}
         r = model.run_input(ag, h, params)
-        peaks[y] = (abs(r["up"][1]), float(np.nanmax(np.abs(r["up"][-20:]))), r["failed"])
-    early, late, failed = peaks[2.80]
-    assert not failed and late < early, peaks
-    early, late, failed = peaks[2.86]
-    assert failed or late > 1e6 * early, peaks  # 1.08^300 = 1e10
+        early = float(np.max(np.abs(r["up"][1:6])))  # about the amplitude
+        late = float(np.max(np.abs(r["up"][-20:])))
+        # Undamped free vibration: RK4 at h omega <= 2.5 only damps it a
+        # little, so the late swings stay below the early ones (not 1e10 times).
+        assert not r["failed"] and late < 2 * early, (y, early, late)
 
 
 def test_automatic_steps_stay_within_1e6_of_the_reference_for_every_communication_step(model):

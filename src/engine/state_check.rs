@@ -1,0 +1,95 @@
+//! Checks of a state read back from bytes (`fmi2DeSerializeFMUstate`): a
+//! blob changed by a single bit must be refused, never lead to a panic, a
+//! hang or a non-finite output. The scene and settings were validated when
+//! the simulator was built; these are the dynamic fields.
+
+use super::Simulator;
+use crate::mode::{Contact, Mode};
+use crate::params::MAX_BODIES;
+use crate::snapshot::SnapshotError;
+
+impl Simulator {
+    /// The contact states: free exactly where mus = 0, as a fresh scene's
+    /// beyond the stack (checked before the mode's dynamics are built).
+    pub(super) fn check_restored_contacts(&self) -> Result<(), SnapshotError> {
+        let fresh = Mode::all_stuck(&self.sys);
+        for j in 0..MAX_BODIES {
+            let c = self.mode.contact[j];
+            let ok = if j == 0 || j > self.sys.n {
+                c == fresh.contact[j]
+            } else {
+                (c == Contact::Free) == self.sys.is_free(j)
+            };
+            if !ok {
+                return Err(format!(
+                    "contact state {c:?} of interface {j} does not fit the stack of the saved state"
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Every other dynamic field: finite values, a time >= 0, peaks >= 0,
+    /// nothing beyond the stack, velocities that agree with the mode, and a
+    /// mode that satisfies the contact law.
+    pub(super) fn check_restored(&self) -> Result<(), SnapshotError> {
+        let n = self.sys.n;
+        let finite = [
+            self.t,
+            self.e_input,
+            self.e_viscous,
+            self.peak_u0,
+            self.peak_a0,
+        ]
+        .into_iter()
+        .chain([self.ag_now, self.fext_now])
+        .chain(self.u)
+        .chain(self.v)
+        .chain(self.e_friction)
+        .chain(self.peak_slip)
+        .all(f64::is_finite);
+        if !finite {
+            return Err("a value of the saved state is not finite".into());
+        }
+        if self.t < 0.0 {
+            return Err(format!("time {} of the saved state is negative", self.t));
+        }
+        if !(self.last_event.is_nan() || (0.0..=self.t).contains(&self.last_event)) {
+            return Err(format!(
+                "last event time {} of the saved state is not within [0, {}]",
+                self.last_event, self.t
+            ));
+        }
+        let peaks = [self.peak_u0, self.peak_a0]
+            .into_iter()
+            .chain(self.peak_slip);
+        if peaks.into_iter().any(|p| p < 0.0) {
+            return Err("a peak of the saved state is negative".into());
+        }
+        let beyond = (n + 1..MAX_BODIES)
+            .any(|i| self.u[i] != 0.0 || self.v[i] != 0.0 || self.e_friction[i] != 0.0)
+            || self.peak_slip[n + 1..].iter().any(|&p| p != 0.0);
+        if beyond || self.e_friction[0] != 0.0 || self.peak_slip[0] != 0.0 {
+            return Err("the saved state has motion beyond its stack".into());
+        }
+        for j in 1..=n {
+            let dv = self.v[j] - self.v[j - 1];
+            let ok = match self.mode.contact[j] {
+                Contact::Stuck => dv == 0.0,
+                Contact::SlipForward => dv >= 0.0,
+                Contact::SlipBackward => dv <= 0.0,
+                Contact::Free => true,
+            };
+            if !ok {
+                return Err(format!(
+                    "interface {j} is {:?} in the saved state but its relative velocity is {dv}",
+                    self.mode.contact[j]
+                ));
+            }
+        }
+        if !self.mode_is_consistent() {
+            return Err("the saved stick/slip mode violates the contact law".into());
+        }
+        Ok(())
+    }
+}

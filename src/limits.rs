@@ -1,0 +1,160 @@
+//! The limits that keep an instance safe inside its importer's process:
+//! bounded record files, bounded work per call, no non-finite value behind
+//! fmi2OK, and messages that quote only a few characters of a file.
+//! `docs/robustness.md` lists them with what each bad input gets.
+
+use crate::engine::Outputs;
+use crate::params::MAX_BLOCKS;
+
+/// Largest record file read (bytes): 10 million CSV samples fit with room.
+pub const MAX_RECORD_BYTES: u64 = 512 << 20;
+/// Longest line of a record file (bytes, without its end of line).
+pub const MAX_RECORD_LINE: usize = 4096;
+/// Most samples in a record: 2.8 hours at 1 kHz (160 MB in memory).
+pub const MAX_RECORD_SAMPLES: usize = 10_000_000;
+/// Shortest sample interval of a record (s): a 1 MHz record.
+pub const MIN_RECORD_DT: f64 = 1e-6;
+/// Largest absolute sample time of a CSV record and largest AT2 `DT` (s):
+/// about 11.6 days, far beyond any record.
+pub const MAX_RECORD_TIME: f64 = 1e6;
+/// Largest absolute acceleration in a record (m/s^2, after the AT2
+/// conversion from g): 100 000 g.
+pub const MAX_RECORD_ACCEL: f64 = 1e6;
+/// Longest `recordFile` string (bytes), as the usual `PATH_MAX`.
+pub const MAX_PATH_BYTES: usize = 4096;
+/// Most characters of a file's content a message quotes.
+pub const MAX_QUOTE_CHARS: usize = 24;
+/// Most internal steps one call may take (one `fmi2DoStep`): a few seconds
+/// of work for the exact engine, which takes 30-70 ns per step. Record
+/// samples in the interval count as steps; a step of solver 2 counts as 3,
+/// one of solver 3 as [`regularized_step_weight`].
+pub const MAX_STEPS_PER_CALL: f64 = 1e8;
+
+/// What one internal step of solver 3 costs in steps of the exact engine:
+/// it evaluates every interface's `tanh` 6 times a step (four RK4 stages and
+/// the peaks); measured about 260 ns a step with 1 block, 2.4 us with 8.
+pub fn regularized_step_weight(n_blocks: usize) -> f64 {
+    6.0 * (n_blocks + 1) as f64
+}
+
+/// At most [`MAX_QUOTE_CHARS`] characters of `text` between backquotes,
+/// control characters shown as `?`, `...` when cut.
+pub fn quote(text: &str) -> String {
+    let mut out: String = text
+        .chars()
+        .take(MAX_QUOTE_CHARS)
+        .map(|c| if c.is_control() { '?' } else { c })
+        .collect();
+    if text.chars().nth(MAX_QUOTE_CHARS).is_some() {
+        out.push_str("...");
+    }
+    format!("`{out}`")
+}
+
+/// The error of a call that would need more than [`MAX_STEPS_PER_CALL`]
+/// internal steps, or `None` when it fits. `length` is the interval (s),
+/// `h_max` the largest internal step, `samples` the record samples inside,
+/// `weight` the cost of one internal step in exact-engine steps.
+pub fn work_error(length: f64, h_max: f64, samples: usize, weight: f64) -> Option<String> {
+    let steps = length / h_max + samples as f64;
+    (steps * weight > MAX_STEPS_PER_CALL).then(|| {
+        let counted = if weight == 1.0 {
+            String::new()
+        } else {
+            format!(", each counted as {weight} for its solver's cost")
+        };
+        format!(
+            "stepping {length} s would take about {steps:.3e} internal steps \
+             (internal step {h_max:.3e} s, {samples} record samples{counted}), more than \
+             the limit of {MAX_STEPS_PER_CALL:e} per call: split it into shorter \
+             communication steps, or raise maxStep"
+        )
+    })
+}
+
+/// The first output that is NaN or infinite, by its FMU name, with its value.
+pub fn first_non_finite(o: &Outputs) -> Option<(String, f64)> {
+    let scalars = [
+        ("up", o.up),
+        ("vp", o.vp),
+        ("apAbs", o.ap_abs),
+        ("baseShear", o.base_shear),
+        ("peakUp", o.peak_up),
+        ("peakApAbs", o.peak_ap_abs),
+        ("Einput", o.e_input),
+        ("Ekinetic", o.e_kinetic),
+        ("Estrain", o.e_strain),
+        ("Eviscous", o.e_viscous),
+        ("Efriction", o.e_friction),
+    ];
+    if let Some((name, x)) = scalars.iter().find(|(_, x)| !x.is_finite()) {
+        return Some((name.to_string(), *x));
+    }
+    let arrays: [(&str, &[f64; MAX_BLOCKS]); 6] = [
+        ("ub", &o.ub),
+        ("vb", &o.vb),
+        ("slip", &o.slip),
+        ("abAbs", &o.ab_abs),
+        ("F", &o.force),
+        ("peakSlip", &o.peak_slip),
+    ];
+    for j in 0..MAX_BLOCKS {
+        for (name, xs) in arrays {
+            if !xs[j].is_finite() {
+                return Some((format!("{name}[{}]", j + 1), xs[j]));
+            }
+        }
+    }
+    None
+}
+
+/// The error for outputs holding a NaN or an infinity: the first such
+/// variable, its value and the time.
+pub fn non_finite_message(o: &Outputs, start_time: f64) -> Option<String> {
+    first_non_finite(o).map(|(name, x)| {
+        format!(
+            "{name} = {x} at t = {} s: the state or an output left the finite numbers \
+             (inputs or parameters too large for this scene)",
+            start_time + o.t
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quotes_are_short_and_printable() {
+        assert_eq!(quote("abc"), "`abc`");
+        let long = "root:x:0:0:root:/root:/bin/bash";
+        let q = quote(long);
+        assert_eq!(q, "`root:x:0:0:root:/root:/b...`");
+        assert_eq!(quote("a\u{1b}[2Jb"), "`a?[2Jb`");
+    }
+
+    #[test]
+    fn work_beyond_the_limit_is_named() {
+        assert!(work_error(20.0, 1e-3, 4000, 1.0).is_none());
+        let e = work_error(1.0, 1e-12, 0, 1.0).unwrap();
+        assert!(e.contains("1.000e12 internal steps"), "{e}");
+        assert!(work_error(0.0, 1e-3, MAX_RECORD_SAMPLES, 1.0).is_none());
+        // Solver 3 with 8 blocks: 54 times the cost of a step.
+        assert!(work_error(1000.0, 1e-4, 0, 1.0).is_none());
+        let e = work_error(1000.0, 1e-4, 0, regularized_step_weight(8)).unwrap();
+        assert!(e.contains("each counted as 54 for its solver"), "{e}");
+    }
+
+    #[test]
+    fn the_first_non_finite_output_is_named() {
+        let mut o = Outputs::default();
+        assert_eq!(first_non_finite(&o), None);
+        o.slip[2] = f64::NAN;
+        o.peak_slip[1] = f64::INFINITY;
+        let (name, x) = first_non_finite(&o).unwrap();
+        assert_eq!(name, "peakSlip[2]");
+        assert!(x.is_infinite());
+        o.e_input = f64::NEG_INFINITY;
+        assert_eq!(first_non_finite(&o).unwrap().0, "Einput");
+    }
+}
