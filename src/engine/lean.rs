@@ -301,6 +301,12 @@ impl<const NC: usize> UpperClusters<NC> {
         }
     }
 
+    /// Absolute acceleration of cluster `c` (constant in the mode).
+    #[inline(always)]
+    pub(super) fn accel(&self, c: usize) -> f64 {
+        self.accel[c]
+    }
+
     /// Input work on clusters 1.. from `(t, ag, vel)` (a time, the ground
     /// acceleration and the cluster velocities then) to `t_end`, under one
     /// piece: the closed form of `upper_cluster_step`, exact over any
