@@ -10,11 +10,14 @@
 //! - [`record`]: ground-motion files and driving a simulation through one.
 //! - [`regularized`]: tanh-regularized friction with plain RK4, a baseline.
 //! - [`solver`]: the FMU's three solver choices behind one type.
+//! - [`batch`]: `sllRunBatch`, many parameter sets over one record in one
+//!   call (beside the FMI API, for parametric studies).
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
 //! - [`synthetic`]: the embedded default ground motion.
 
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod engine;
 pub mod fmi2;
 pub mod hermite;
