@@ -372,10 +372,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     for allow_breaking in [false, true] {
         for size in (0..=k).rev() {
             let mut best: Option<(u32, Mode)> = None;
-            for stuck_bits in 0u32..(1 << k) {
-                if stuck_bits.count_ones() as usize != size {
-                    continue;
-                }
+            for stuck_bits in subsets_of_size(k, size) {
                 let stuck_ifaces = bits_to_ifaces(stuck_bits, zero);
                 if !allow_breaking && stuck_ifaces & req.must_break != 0 {
                     continue;
@@ -455,6 +452,26 @@ pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
     count
 }
 
+/// The `size`-element subsets of `k` items as bit masks, in increasing
+/// numeric order (Gosper's hack): the order of a scan of `0..2^k` that keeps
+/// the masks with `size` bits set, without scanning all of them.
+fn subsets_of_size(k: usize, size: usize) -> impl Iterator<Item = u32> {
+    let end = 1u32 << k;
+    let mut next = Some(if size == 0 { 0 } else { (1u32 << size) - 1 });
+    std::iter::from_fn(move || {
+        let x = next?;
+        next = if x == 0 {
+            None
+        } else {
+            let low = x & x.wrapping_neg();
+            let ripple = x + low;
+            let y = (((ripple ^ x) >> 2) / low) | ripple;
+            (y < end).then_some(y)
+        };
+        Some(x)
+    })
+}
+
 /// Maps bit b of `bits` to interface `list[b]` as a bit mask over interfaces.
 fn bits_to_ifaces(bits: u32, list: &[usize]) -> u32 {
     list.iter()
@@ -467,6 +484,23 @@ fn bits_to_ifaces(bits: u32, list: &[usize]) -> u32 {
 mod tests {
     use super::*;
     use crate::params::Params;
+
+    #[test]
+    fn subsets_come_in_the_order_of_a_full_scan() {
+        // Expected: the masks of 0..2^k with `size` bits set, in order.
+        for k in 0..=8usize {
+            for size in 0..=k {
+                let scan: Vec<u32> = (0u32..1 << k)
+                    .filter(|b| b.count_ones() as usize == size)
+                    .collect();
+                assert_eq!(
+                    subsets_of_size(k, size).collect::<Vec<_>>(),
+                    scan,
+                    "{k} {size}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn clusters_follow_the_stuck_interfaces() {
