@@ -127,10 +127,8 @@ extern "C" {
  * - `recordFile`: a PEER `.AT2` (in g, converted with `g`) or CSV
  *   `time,accel` (m/s²) file, as the FMU's `recordFile` (an absolute or
  *   working-directory-relative path); multiplied by `recordScale`.
- * - `params`: `nSets` × 28 doubles (`sllBatchParams`), see [`BATCH_PARAMS`]:
- *   nBlocks, mp, Tp, zeta, alpha[1..8], mus[1..8], muk[1..8].
- * - `outputs`: room for `nSets` × 13 doubles (`sllBatchOutputs`), see
- *   [`BATCH_OUTPUTS`]: peakUp, peakApAbs, Einput, nEvents, nAmbiguous,
+ * - `params`: `nSets` × 28 doubles per set: nBlocks, mp, Tp, zeta, alpha[1..8], mus[1..8], muk[1..8].
+ * - `outputs`: room for `nSets` × 13 doubles: peakUp, peakApAbs, Einput, nEvents, nAmbiguous,
  *   peakSlip[1..8].
  * - `message`, `messageSize`: a buffer for the error message (may be NULL).
  *
