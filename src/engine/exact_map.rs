@@ -68,12 +68,14 @@ pub(super) struct ExactMap {
     /// `∫ v² dτ = z^T Q z`, packed: Q00, Q11, Q22, Q33, then the doubled
     /// off-diagonal terms 2Q01, 2Q02, 2Q03, 2Q12, 2Q13, 2Q23.
     pub(super) quad: [f64; 10],
-    /// `bound[m - 2] · |z|` bounds `|v^(m)(τ)|` over the substep, m = 2..=5.
-    pub(super) bound: [[f64; 4]; 4],
+    /// `bound[m - 1] · |z|` bounds `|v^(m)(τ)|` over the substep, m = 1..=5.
+    pub(super) bound: [[f64; 4]; 5],
     /// The largest ratio of the `v^(5)` bound to the `v'''` bound, term by
     /// term: `five_over_three * sup_v(3)` bounds `|v^(5)|` too (every term
     /// is non-negative), which saves computing both on every substep.
     pub(super) five_over_three: f64,
+    /// The same for `|v'|` (`sup|u''|`), for the quick test of the peak of u.
+    pub(super) one_over_three: f64,
     /// k / mass, c / mass, c.
     pub(super) w2: f64,
     pub(super) cm: f64,
@@ -149,8 +151,8 @@ impl ExactMap {
         // |v^(m)| <= h^-m Σ_i |z_i| Σ_k |T_(m+k)[v][i]| (m+k)! / k!.
         // The sum stops at `degree + 6 - m` terms (the rest is below 1e-20
         // of it); the factor covers rounding.
-        let mut bound = [[0.0; 4]; 4];
-        for (b, m) in bound.iter_mut().zip(2..=5usize) {
+        let mut bound = [[0.0; 4]; 5];
+        for (b, m) in bound.iter_mut().zip(1..=5usize) {
             for k in (0..=n_terms - m).rev() {
                 let falling: f64 = ((k + 1)..=(k + m)).map(|x| x as f64).product();
                 for i in 0..4 {
@@ -162,11 +164,15 @@ impl ExactMap {
                 *x *= scale;
             }
         }
-        let five_over_three = (0..4)
-            .map(|i| bound[3][i] / bound[1][i])
-            .fold(0.0, f64::max);
+        let over_three = |m: usize| {
+            (0..4)
+                .map(|i| bound[m - 1][i] / bound[2][i])
+                .fold(0.0, f64::max)
+        };
+        let (five_over_three, one_over_three) = (over_three(5), over_three(1));
         ExactMap {
             five_over_three,
+            one_over_three,
             mass,
             h,
             u,
@@ -190,10 +196,10 @@ impl ExactMap {
             + z[3] * q[3] * z[3]
     }
 
-    /// Bound on `|v^(m)|` over the substep from `z`, m = 2..=5.
+    /// Bound on `|v^(m)|` over the substep from `z`, m = 1..=5.
     #[inline(always)]
     pub(super) fn sup_v(&self, m: usize, z: &[f64; 4]) -> f64 {
-        let b = &self.bound[m - 2];
+        let b = &self.bound[m - 1];
         b[0] * z[0].abs() + b[1] * z[1].abs() + b[2] * z[2].abs() + b[3] * z[3].abs()
     }
 }
@@ -292,7 +298,7 @@ mod tests {
         // Expected: |v^(m)(τ)| <= sup_v(m, z) at every τ of a 400-point grid
         // of the substep, the derivatives taken from the exact state at τ
         // (the map built for τ) through the equation of motion; and the
-        // bound of v^(5) through `five_over_three`. Several periods and
+        // bounds of v^(5) and v' through `five_over_three`, `one_over_three`. Several periods and
         // dampings, states and forcings of every sign.
         let mut seed = 0x1234_5678_9abc_def0u64;
         let mut next = || {
@@ -313,7 +319,7 @@ mod tests {
             let map = ExactMap::new(&sys, mass, h);
             for _ in 0..20 {
                 let z = [0.05 * next(), 0.5 * next(), 5.0 * next(), 500.0 * next()];
-                let mut worst = [0.0f64; 4];
+                let mut worst = [0.0f64; 5];
                 for k in 1..=400 {
                     let tau = canonical_length(h * k as f64 / 400.0);
                     let at = ExactMap::new(&sys, mass, tau);
@@ -324,14 +330,15 @@ mod tests {
                     let d3 = -map.w2 * d1 - map.cm * d2;
                     let d4 = -map.w2 * d2 - map.cm * d3;
                     let d5 = -map.w2 * d3 - map.cm * d4;
-                    for (w, d) in worst.iter_mut().zip([d2, d3, d4, d5]) {
+                    for (w, d) in worst.iter_mut().zip([d1, d2, d3, d4, d5]) {
                         *w = w.max(d.abs());
                     }
                 }
-                for m in 2..=5 {
-                    assert!(worst[m - 2] <= map.sup_v(m, &z), "Tp {tp}: v^({m})");
+                for m in 1..=5 {
+                    assert!(worst[m - 1] <= map.sup_v(m, &z), "Tp {tp}: v^({m})");
                 }
-                assert!(worst[3] <= map.five_over_three * map.sup_v(3, &z));
+                assert!(worst[4] <= map.five_over_three * map.sup_v(3, &z));
+                assert!(worst[0] <= map.one_over_three * map.sup_v(3, &z));
             }
         }
     }

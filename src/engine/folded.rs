@@ -33,9 +33,8 @@ use crate::params::MAX_BODIES;
 struct End {
     u: f64,
     v: f64,
-    /// Absolute acceleration and its rate.
+    /// Absolute acceleration.
     accel: f64,
-    jerk: f64,
     /// Forcing per unit mass and ground acceleration at the end.
     p: f64,
     ag: f64,
@@ -81,11 +80,18 @@ impl Stepping {
         (self.load_accel + fext * self.inv_mass - ag, ag)
     }
 
-    /// Absolute acceleration and its rate from (u, v, p, ag).
+    /// Absolute acceleration from (u, v, p, ag).
     #[inline(always)]
-    fn accel_jerk(&self, map: &ExactMap, u: f64, v: f64, p: f64, ag: f64) -> (f64, f64) {
-        let rel = p - map.w2 * u - map.cm * v;
-        (rel + ag, self.p1 - map.w2 * v - map.cm * rel + self.ag_rate)
+    fn accel(&self, map: &ExactMap, u: f64, v: f64, p: f64, ag: f64) -> f64 {
+        p - map.w2 * u - map.cm * v + ag
+    }
+
+    /// Rate of the absolute acceleration where the velocity is `v`, the
+    /// absolute acceleration `accel` and the ground's `ag` (taken only on
+    /// the few substeps whose quick tests fail).
+    #[inline(always)]
+    fn jerk(&self, map: &ExactMap, v: f64, accel: f64, ag: f64) -> f64 {
+        self.p1 - map.w2 * v - map.cm * (accel - ag) + self.ag_rate
     }
 
     /// One substep of length `hs` (the map's, up to rounding) from `z`.
@@ -108,12 +114,11 @@ impl Stepping {
             v += delta * rel;
         }
         let (p, ag) = (z[2] + z[3] * hs, ag + self.ag_rate * hs);
-        let (accel, jerk) = self.accel_jerk(map, u, v, p, ag);
+        let accel = self.accel(map, u, v, p, ag);
         End {
             u,
             v,
             accel,
-            jerk,
             p,
             ag,
             input,
@@ -137,7 +142,8 @@ fn raise_peak_proved(
 ) -> bool {
     let h2 = h * h;
     let rest = h2 * h2 / 384.0 * fourth;
-    let ends = y0.abs().max(y1.abs());
+    let (a0, a1) = (y0.abs(), y1.abs());
+    let ends = if a0 > a1 { a0 } else { a1 };
     // The cubic's bound of `hermite::raise_peak`, plus its remainder.
     if ends + 4.0 / 27.0 * h * (d0.abs() + d1.abs()) + rest <= *peak {
         return true;
@@ -166,14 +172,68 @@ fn peak_near(
 }
 
 /// Whether the absolute acceleration stays inside the stick band `[lo, hi]`
-/// over the substep: its ends `a0`, `a1`, rates `j0`, `j1`, and
-/// `sup|A''| <= s3`.
+/// over the substep from `z` to `x`: its ends, `sup|A''| <= s3`, and (only
+/// when that does not decide) its rates at the ends.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn in_band_proved(lo: f64, hi: f64, [a0, j0, a1, j1]: [f64; 4], h: f64, s3: f64) -> bool {
-    let sag = 0.125 * h * h * s3;
-    (a0.min(a1) - sag > lo && a0.max(a1) + sag < hi)
-        || (stays_positive([a0 - lo, j0, a1 - lo, j1], h, s3)
-            && stays_positive([hi - a0, -j0, hi - a1, -j1], h, s3))
+fn in_band_proved(
+    st: &Stepping,
+    map: &ExactMap,
+    z: &[f64; 4],
+    x: &End,
+    [a0, ag0]: [f64; 2],
+    hs: f64,
+    s3: f64,
+    [lo, hi]: [f64; 2],
+) -> bool {
+    let a1 = x.accel;
+    let sag = 0.125 * hs * hs * s3;
+    // Plain comparisons (f64::min and max carry NaN rules not needed here).
+    let (low, high) = if a0 < a1 { (a0, a1) } else { (a1, a0) };
+    (low - sag > lo && high + sag < hi) || {
+        let (j0, j1) = (st.jerk(map, z[1], a0, ag0), st.jerk(map, x.v, a1, x.ag));
+        stays_positive([a0 - lo, j0, a1 - lo, j1], hs, s3)
+            && stays_positive([hi - a0, -j0, hi - a1, -j1], hs, s3)
+    }
+}
+
+/// Raises the structure's peaks of |u0| and |A0| over the substep from `z`
+/// to `x` (`A0` the absolute acceleration; `a0`, `ag0` it and the ground's
+/// at the start) when that is proved; false otherwise. Quick tests first:
+/// the larger end plus `h²/8 sup|y''|` (`sup|u''| = sup|v'|`, `sup|A''| =
+/// sup|v'''|`); then the cubic bounds with the rates.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn structure_peaks_proved(
+    st: &Stepping,
+    map: &ExactMap,
+    z: &[f64; 4],
+    x: &End,
+    [a0, ag0]: [f64; 2],
+    hs: f64,
+    s3: f64,
+    [peak_u0, peak_a0]: [&mut f64; 2],
+) -> bool {
+    let sag = 0.125 * hs * hs * s3;
+    let (e0, e1) = (z[0].abs(), x.u.abs());
+    let ends = if e0 > e1 { e0 } else { e1 };
+    let u_proved = ends + sag * map.one_over_three <= *peak_u0
+        || raise_peak_proved(peak_u0, [z[0], z[1], x.u, x.v], hs, s3, || map.sup_v(2, z));
+    if !u_proved {
+        return false;
+    }
+    let (e0, e1) = (a0.abs(), x.accel.abs());
+    let ends = if e0 > e1 { e0 } else { e1 };
+    ends + sag <= *peak_a0 || {
+        let (j0, j1) = (
+            st.jerk(map, z[1], a0, ag0),
+            st.jerk(map, x.v, x.accel, x.ag),
+        );
+        let fifth = map.five_over_three * s3;
+        raise_peak_proved(peak_a0, [a0, j0, x.accel, j1], hs, fifth, || {
+            map.sup_v(4, z)
+        })
+    }
 }
 
 /// Whether `g > 0` over `(0, h]` is proved from its ends (values `g0`, `g1`,
@@ -244,7 +304,7 @@ impl Simulator {
         let (mut e_input, mut e_viscous) = (0.0, 0.0);
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let (mut p, mut ag) = st.begin(piece, t0);
-        let (mut a0, mut jerk0) = st.accel_jerk(map, u0, v0, p, ag);
+        let mut a0 = st.accel(map, u0, v0, p, ag);
         let mut taken = 0u64;
         let mut pending = None;
         loop {
@@ -258,29 +318,22 @@ impl Simulator {
                     map = maps.get(i);
                 }
                 (p, ag) = st.begin(piece, t0);
-                (a0, jerk0) = st.accel_jerk(map, u0, v0, p, ag);
+                a0 = st.accel(map, u0, v0, p, ag);
                 continue;
             }
             let (t1, hs) = substep(piece, t0);
             let z = [u0, v0, p, st.p1];
             let x = st.step(map, &z, ag, hs);
             let s3 = map.sup_v(3, &z);
-            if has_band && !in_band_proved(band_lo, band_hi, [a0, jerk0, x.accel, x.jerk], hs, s3) {
+            let start = [a0, ag];
+            if has_band && !in_band_proved(&st, map, &z, &x, start, hs, s3, [band_lo, band_hi]) {
                 break;
             }
-            let proved = raise_peak_proved(&mut peak_u0, [u0, v0, x.u, x.v], hs, s3, || {
-                map.sup_v(2, &z)
-            }) && raise_peak_proved(
-                &mut peak_a0,
-                [a0, jerk0, x.accel, x.jerk],
-                hs,
-                map.five_over_three * s3,
-                || map.sup_v(4, &z),
-            );
-            if !proved {
+            let peaks = [&mut peak_u0, &mut peak_a0];
+            if !structure_peaks_proved(&st, map, &z, &x, start, hs, s3, peaks) {
                 break;
             }
-            (u0, v0, a0, jerk0, p, ag) = (x.u, x.v, x.accel, x.jerk, x.p, x.ag);
+            (u0, v0, a0, p, ag) = (x.u, x.v, x.accel, x.p, x.ag);
             e_input += x.input;
             e_viscous += x.viscous;
             t0 = t1;
@@ -332,7 +385,7 @@ impl Simulator {
         let (mut e_input, mut e_viscous) = (0.0, 0.0);
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let (mut p, mut ag) = st.begin(piece, t0);
-        let (mut a0, mut jerk0) = st.accel_jerk(map, u0, vel[0], p, ag);
+        let mut a0 = st.accel(map, u0, vel[0], p, ag);
         let mut upper = UpperClusters::<NC>::new(d, piece.h, piece.exc.ag_rate);
         let mut run_start = (t0, ag, vel);
         let mut taken = 0u64;
@@ -350,7 +403,7 @@ impl Simulator {
                     map = maps.get(i);
                 }
                 (p, ag) = st.begin(piece, t0);
-                (a0, jerk0) = st.accel_jerk(map, u0, vel[0], p, ag);
+                a0 = st.accel(map, u0, vel[0], p, ag);
                 upper = UpperClusters::new(d, piece.h, piece.exc.ag_rate);
                 run_start = (t0, ag, vel);
                 continue;
@@ -362,7 +415,8 @@ impl Simulator {
             (du[0], v_end[0]) = (x.u - u0, x.v);
             upper.step(&vel, ag, hs, &mut du, &mut v_end);
             let s3 = map.sup_v(3, &z);
-            if has_band && !in_band_proved(band_lo, band_hi, [a0, jerk0, x.accel, x.jerk], hs, s3) {
+            let start = [a0, ag];
+            if has_band && !in_band_proved(&st, map, &z, &x, start, hs, s3, [band_lo, band_hi]) {
                 break;
             }
             // sup|v0''|, and with the ground's slope the bound on the second
@@ -377,7 +431,7 @@ impl Simulator {
                 // Between two upper clusters the relative velocity is linear
                 // in time (the ground's terms cancel): the ends decide.
                 let holds = if m == 0 {
-                    g0.min(g1) > sag || {
+                    (g0 > sag && g1 > sag) || {
                         // Rates: the upper cluster's constant acceleration
                         // minus the structure's.
                         let s = slip_sign[m];
@@ -391,14 +445,8 @@ impl Simulator {
                     break 'steps;
                 }
             }
-            let mut proved = raise_peak_proved(&mut peak_u0, [u0, vel[0], x.u, x.v], hs, s3, || s2)
-                && raise_peak_proved(
-                    &mut peak_a0,
-                    [a0, jerk0, x.accel, x.jerk],
-                    hs,
-                    map.five_over_three * s3,
-                    || map.sup_v(4, &z),
-                );
+            let peaks = [&mut peak_u0, &mut peak_a0];
+            let mut proved = structure_peaks_proved(&st, map, &z, &x, start, hs, s3, peaks);
             let mut new_slip = slip;
             for m in 0..NC - 1 {
                 let increment = du[m + 1] - du[m];
@@ -421,7 +469,7 @@ impl Simulator {
             for c in 1..NC {
                 shift[c] += du[c];
             }
-            (u0, vel, a0, jerk0, p, ag) = (x.u, v_end, x.accel, x.jerk, x.p, x.ag);
+            (u0, vel, a0, p, ag) = (x.u, v_end, x.accel, x.p, x.ag);
             e_input += x.input;
             e_viscous += x.viscous;
             t0 = t1;
