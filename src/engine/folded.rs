@@ -317,8 +317,8 @@ impl Simulator {
                     let i = maps.index(sys, st.mass, hc);
                     map = maps.get(i);
                 }
+                // A0 carries over: it is continuous (a jump of Fext ends the run).
                 (p, ag) = st.begin(piece, t0);
-                a0 = st.accel(map, u0, v0, p, ag);
                 continue;
             }
             let (t1, hs) = substep(piece, t0);
@@ -402,8 +402,8 @@ impl Simulator {
                     let i = maps.index(sys, st.mass, hc);
                     map = maps.get(i);
                 }
+                // A0 carries over: it is continuous (a jump of Fext ends the run).
                 (p, ag) = st.begin(piece, t0);
-                a0 = st.accel(map, u0, vel[0], p, ag);
                 upper = UpperClusters::new(d, piece.h, piece.exc.ag_rate);
                 run_start = (t0, ag, vel);
                 continue;
