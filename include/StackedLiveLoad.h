@@ -122,6 +122,31 @@ extern "C" {
 #endif // __cplusplus
 
 /**
+ * Runs `nSets` parameter sets over one record.
+ *
+ * - `recordFile`: a PEER `.AT2` (in g, converted with `g`) or CSV
+ *   `time,accel` (m/s²) file, as the FMU's `recordFile` (an absolute or
+ *   working-directory-relative path); multiplied by `recordScale`.
+ * - `params`: `nSets` × 28 doubles per set: nBlocks, mp, Tp, zeta, alpha[1..8], mus[1..8], muk[1..8].
+ * - `outputs`: room for `nSets` × 13 doubles: peakUp, peakApAbs, Einput, nEvents, nAmbiguous,
+ *   peakSlip[1..8].
+ * - `message`, `messageSize`: a buffer for the error message (may be NULL).
+ *
+ * Returns 0 (fmi2OK), or 3 (fmi2Error) with a message naming the set and
+ * the variable and its allowed range, or the record's file, line and
+ * problem; the results of the sets before a bad one are written. A panic
+ * never crosses this boundary (it is reported as an error).
+ */
+int sllRunBatch(const char *recordFile,
+                double g,
+                double recordScale,
+                int nSets,
+                const double *params,
+                double *outputs,
+                char *message,
+                uintptr_t messageSize);
+
+/**
  * "default": the standard FMI 2.0 types.
  */
 const char *fmi2GetTypesPlatform(void);

@@ -18,7 +18,9 @@ Errors: relative error of the peak structure drift, of the largest peak slip
 (empty when the reference does not slip), and the largest drift-history error
 over the record's samples divided by the reference peak drift. Seconds: median
 wall time of the computation alone (one fmi2DoStep over the whole record; the
-OpenSees analysis loop), over --repeats runs.
+OpenSees analysis loop), over --repeats runs. The physical floor of each
+record, drawn as a vertical line: the exact Nigam-Jennings recurrence of the bare
+structure over its samples, in Rust (examples/floor.rs), median of 31 rounds.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import argparse
 import csv
 import math
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -238,7 +241,18 @@ def summarize(rows: list[dict]) -> list[str]:
     return lines
 
 
-def plot(rows: list[dict], path: Path):
+def floor_seconds(record: Path) -> float | None:
+    """Median seconds of the Nigam-Jennings recurrence over `record` (Tp 0.5 s,
+    5 %), from examples/floor.rs; None when cargo cannot run it."""
+    try:
+        out = subprocess.run(["cargo", "run", "--quiet", "--release", "--example", "floor", "--",
+                              str(record)], cwd=ROOT, capture_output=True, text=True, check=True)
+        return float(out.stdout.strip())
+    except (OSError, subprocess.CalledProcessError, ValueError):
+        return None
+
+
+def plot(rows: list[dict], path: Path, floors: dict | None = None):
     panels = sorted({(r["scene"], r["record"]) for r in rows})
     cols = 2
     fig, axes = plt.subplots(math.ceil(len(panels) / cols), cols, figsize=(12, 4.2 * math.ceil(len(panels) / cols)),
@@ -255,6 +269,9 @@ def plot(rows: list[dict], path: Path):
             ax.loglog([p[0] for p in pts], [p[1] for p in pts], marker=marker, color=color, label=method, ms=4)
         d = next(r for r in sub if r["method"] == "event" and r["setting"] == "auto")
         ax.loglog(d["seconds"], max(d["err_peak_drift"], 1e-16), "*", color="k", ms=14, label="default")
+        if floors and floors.get(record):
+            ax.axvline(floors[record], color="k", ls=":", lw=1.0,
+                       label="floor: Nigam-Jennings, bare SDOF (Rust)")
         ax.axhline(TARGET, color="gray", ls="--", lw=0.8)
         ax.set_title(f"{scene} under {record}")
         ax.set_xlabel("seconds per simulation")
@@ -294,8 +311,19 @@ def main(argv=None):
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
-    plot(rows, args.out / "accuracy_speed.png")
+    floors = {}
+    for record in records:
+        label = "harmonic" if record.suffix == ".csv" else record.stem
+        floors[label] = floor_seconds(record)
+    plot(rows, args.out / "accuracy_speed.png", floors)
     summary = summarize(rows)
+    for label, floor in floors.items():
+        if floor:
+            for r in rows:
+                if r["record"] == label and r["method"] == "event" and r["setting"] == "auto":
+                    summary.append(f"{r['scene']} / {label}: default {r['seconds'] * 1e6:.0f} us = "
+                                   f"{r['seconds'] / floor:.1f}x the floor ({floor * 1e6:.1f} us, "
+                                   f"Nigam-Jennings of the bare structure in Rust, FMU call included)")
     (args.out / "summary.txt").write_text("\n".join(summary) + "\n")
     print("\n".join(summary))
     print(f"wrote {args.out}/accuracy_speed.csv, accuracy_speed.png, summary.txt "

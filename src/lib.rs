@@ -12,11 +12,14 @@
 //! - [`regularized`]: tanh-regularized friction with plain RK4, a baseline.
 //! - [`ports`]: outputs and their derivatives as a coupling master sees them.
 //! - [`solver`]: the FMU's three solver choices behind one type.
+//! - [`batch`]: `sllRunBatch`, many parameter sets over one record in one
+//!   call (beside the FMI API, for parametric studies).
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
 //! - [`synthetic`]: the embedded default ground motion.
 
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod engine;
 pub mod fmi;
 pub mod hermite;

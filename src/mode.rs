@@ -141,8 +141,47 @@ pub struct Dynamics {
 }
 
 impl Dynamics {
-    /// The clusters and constant loads of `mode`.
+    /// The clusters and constant loads of `mode`, its guards and moving
+    /// interfaces.
     pub fn new(sys: &System, mode: &Mode) -> Dynamics {
+        let mut d = Dynamics::clusters(sys, mode);
+        for j in 1..=sys.n {
+            let constant = mode.is_stuck(j) && d.cluster_of[j] != 0;
+            if !sys.is_free(j) && !constant {
+                d.changing_guards |= 1 << j;
+            }
+        }
+        for j in 1..=sys.n {
+            let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
+            if hi != lo {
+                d.moving[d.n_moving] = Moving { j, hi, lo };
+                d.n_moving += 1;
+            }
+            if d.changing_guards & (1 << j) == 0 {
+                continue;
+            }
+            d.guards[d.n_guards] = if mode.is_stuck(j) {
+                let (mass_above, f_top) = d.force_affine(j, mode);
+                Guard::Stuck {
+                    mass_above,
+                    f_top,
+                    cap: stick_capacity(sys, j),
+                }
+            } else {
+                Guard::Slip {
+                    hi,
+                    lo,
+                    sign: mode.contact[j].slip_sign(),
+                }
+            };
+            d.n_guards += 1;
+        }
+        d
+    }
+
+    /// The clusters, masses and forces of `mode` only (what the contact law
+    /// needs), without its guards: for the candidate modes of a resolution.
+    pub fn clusters(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics {
             n_clusters: 0,
             cluster_of: [0; MAX_BODIES],
@@ -186,43 +225,12 @@ impl Dynamics {
             d.accel_const[c] = d.slip_load[c] / d.mass[c];
         }
         d.inv_mass0 = 1.0 / d.mass[0];
-        for j in 1..=sys.n {
-            let constant = mode.is_stuck(j) && d.cluster_of[j] != 0;
-            if !sys.is_free(j) && !constant {
-                d.changing_guards |= 1 << j;
-            }
-        }
         for c in 0..d.n_clusters {
             let mut above = 0.0;
             for j in (d.bottom[c]..=d.top[c]).rev() {
                 above += sys.mass[j];
                 d.mass_above[j] = above;
             }
-        }
-        for j in 1..=sys.n {
-            let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
-            if hi != lo {
-                d.moving[d.n_moving] = Moving { j, hi, lo };
-                d.n_moving += 1;
-            }
-            if d.changing_guards & (1 << j) == 0 {
-                continue;
-            }
-            d.guards[d.n_guards] = if mode.is_stuck(j) {
-                let (mass_above, f_top) = d.force_affine(j, mode);
-                Guard::Stuck {
-                    mass_above,
-                    f_top,
-                    cap: stick_capacity(sys, j),
-                }
-            } else {
-                Guard::Slip {
-                    hi,
-                    lo,
-                    sign: mode.contact[j].slip_sign(),
-                }
-            };
-            d.n_guards += 1;
         }
         d
     }
@@ -299,7 +307,7 @@ pub fn stick_capacity(sys: &System, j: usize) -> f64 {
 /// interfaces in `zero` (bit j set: relative velocity exactly zero). Zero
 /// or negative means consistent.
 pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
-    let d = Dynamics::new(sys, mode);
+    let d = Dynamics::clusters(sys, mode);
     let mut worst = f64::NEG_INFINITY;
     for j in 1..=sys.n {
         if zero & (1 << j) == 0 {
@@ -372,10 +380,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     for allow_breaking in [false, true] {
         for size in (0..=k).rev() {
             let mut best: Option<(u32, Mode)> = None;
-            for stuck_bits in 0u32..(1 << k) {
-                if stuck_bits.count_ones() as usize != size {
-                    continue;
-                }
+            for stuck_bits in subsets_of_size(k, size) {
                 let stuck_ifaces = bits_to_ifaces(stuck_bits, zero);
                 if !allow_breaking && stuck_ifaces & req.must_break != 0 {
                     continue;
@@ -455,6 +460,26 @@ pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
     count
 }
 
+/// The `size`-element subsets of `k` items as bit masks, in increasing
+/// numeric order (Gosper's hack): the order of a scan of `0..2^k` that keeps
+/// the masks with `size` bits set, without scanning all of them.
+fn subsets_of_size(k: usize, size: usize) -> impl Iterator<Item = u32> {
+    let end = 1u32 << k;
+    let mut next = Some(if size == 0 { 0 } else { (1u32 << size) - 1 });
+    std::iter::from_fn(move || {
+        let x = next?;
+        next = if x == 0 {
+            None
+        } else {
+            let low = x & x.wrapping_neg();
+            let ripple = x + low;
+            let y = (((ripple ^ x) >> 2) / low) | ripple;
+            (y < end).then_some(y)
+        };
+        Some(x)
+    })
+}
+
 /// Maps bit b of `bits` to interface `list[b]` as a bit mask over interfaces.
 fn bits_to_ifaces(bits: u32, list: &[usize]) -> u32 {
     list.iter()
@@ -467,6 +492,23 @@ fn bits_to_ifaces(bits: u32, list: &[usize]) -> u32 {
 mod tests {
     use super::*;
     use crate::params::Params;
+
+    #[test]
+    fn subsets_come_in_the_order_of_a_full_scan() {
+        // Expected: the masks of 0..2^k with `size` bits set, in order.
+        for k in 0..=8usize {
+            for size in 0..=k {
+                let scan: Vec<u32> = (0u32..1 << k)
+                    .filter(|b| b.count_ones() as usize == size)
+                    .collect();
+                assert_eq!(
+                    subsets_of_size(k, size).collect::<Vec<_>>(),
+                    scan,
+                    "{k} {size}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn clusters_follow_the_stuck_interfaces() {

@@ -224,7 +224,13 @@ impl Simulator {
 
     /// Ends a run of `taken` steps at `t`: adds its input and viscous work,
     /// sets the structure's peaks (|u0|, |A0|).
-    fn end_run(&mut self, t: f64, taken: u64, [input, viscous]: [f64; 2], [u0, a0]: [f64; 2]) {
+    pub(super) fn end_run(
+        &mut self,
+        t: f64,
+        taken: u64,
+        [input, viscous]: [f64; 2],
+        [u0, a0]: [f64; 2],
+    ) {
         self.e_input += input;
         self.e_viscous += viscous;
         self.peak_u0 = u0;
@@ -237,7 +243,7 @@ impl Simulator {
 /// The clusters above the structure's over the substeps of one piece: the
 /// exact polynomials in time that RK4 gives them ([`upper_cluster_step`]),
 /// with the terms that are constant over the piece collected once.
-struct UpperClusters<const NC: usize> {
+pub(super) struct UpperClusters<const NC: usize> {
     h: f64,
     half_h: f64,
     ag_rate: f64,
@@ -251,7 +257,7 @@ struct UpperClusters<const NC: usize> {
 }
 
 impl<const NC: usize> UpperClusters<NC> {
-    fn new(d: &Dynamics, h: f64, ag_rate: f64) -> Self {
+    pub(super) fn new(d: &Dynamics, h: f64, ag_rate: f64) -> Self {
         let accel: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
         let (h2, h3) = (h * h, h * h * h);
         UpperClusters {
@@ -269,7 +275,14 @@ impl<const NC: usize> UpperClusters<NC> {
     /// where the ground acceleration starts at `ag0`: their displacement
     /// increments and end velocities into `du` and `v_end`.
     #[inline(always)]
-    fn step(&self, vel: &[f64; NC], ag0: f64, hs: f64, du: &mut [f64; NC], v_end: &mut [f64; NC]) {
+    pub(super) fn step(
+        &self,
+        vel: &[f64; NC],
+        ag0: f64,
+        hs: f64,
+        du: &mut [f64; NC],
+        v_end: &mut [f64; NC],
+    ) {
         if hs != self.h {
             // A piece's last substep, longer or shorter by rounding.
             for c in 1..NC {
@@ -288,11 +301,17 @@ impl<const NC: usize> UpperClusters<NC> {
         }
     }
 
+    /// Absolute acceleration of cluster `c` (constant in the mode).
+    #[inline(always)]
+    pub(super) fn accel(&self, c: usize) -> f64 {
+        self.accel[c]
+    }
+
     /// Input work on clusters 1.. from `(t, ag, vel)` (a time, the ground
     /// acceleration and the cluster velocities then) to `t_end`, under one
     /// piece: the closed form of `upper_cluster_step`, exact over any
     /// length.
-    fn work(&self, (t, ag, vel): (f64, f64, [f64; NC]), t_end: f64) -> f64 {
+    pub(super) fn work(&self, (t, ag, vel): (f64, f64, [f64; NC]), t_end: f64) -> f64 {
         let length = t_end - t;
         if length <= 0.0 {
             return 0.0;
@@ -330,7 +349,7 @@ fn any_stuck_guard_fires(guards: &[Guard], a1: f64) -> bool {
 /// stuck guard of `guards` is positive by a margin far above rounding: the
 /// stick `|mass_above A + f_top| <= cap` solved for A and shrunk by 1e-12
 /// of its scale.
-fn safe_accel_band(guards: &[Guard]) -> (f64, f64) {
+pub(super) fn safe_accel_band(guards: &[Guard]) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
     for g in guards {
         if let Guard::Stuck {

@@ -258,8 +258,15 @@ def test_fext_takes_plus_the_upper_base_shear(building, monkeypatch):
     output = coupling.Storey.output
     monkeypatch.setattr(coupling.Storey, "output",
                         lambda self, name: (-1 if name == "baseShear" else 1) * output(self, name))
-    minus = building.couple(storeys, rec, 0.002, master="gauss-seidel", extrapolation="history")
-    assert drift_error(minus, exact) > 1.0
+    # The divergence ends either in drifts far off the exact ones or, once the
+    # exchanged acceleration leaves its range (|ag| <= 1e6 m/s2), in the FMU
+    # refusing it by name.
+    try:
+        minus = building.couple(storeys, rec, 0.002, master="gauss-seidel", extrapolation="history")
+    except Exception as e:  # fmpy raises on the FMU's fmi2Error
+        assert "ag" in str(e) or "fmi2SetReal" in str(e), e
+    else:
+        assert drift_error(minus, exact) > 1.0
 
 
 def test_four_storeys_from_a_peer_record_converge_to_the_exact_building(building):

@@ -1,0 +1,212 @@
+//! A batch entry point beside the FMI API: many parameter sets over one
+//! record in one call, for parametric studies, where the FMI calls and the
+//! importer's own overhead per simulation (Python and ctypes in
+//! `scripts/study_tasks.py`) would cost more than the simulation itself.
+//!
+//! Each set runs the whole record from rest with the default solver
+//! (event-located, automatic step), exactly as an FMU instance with those
+//! parameters and `recordFile` does in one `fmi2DoStep` over the record.
+#![allow(non_snake_case, clippy::missing_safety_doc)]
+
+use crate::params::{check_scalar, Params, Settings, MAX_BLOCKS};
+use crate::record::{self, GroundMotion};
+use crate::Simulator;
+use std::ffi::{c_char, c_int, CStr};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// Doubles per parameter set: `nBlocks` (an integer 0..8), `mp`, `Tp`,
+/// `zeta`, then `alpha[1..8]`, `mus[1..8]`, `muk[1..8]` (entries beyond
+/// `nBlocks` are ignored).
+pub const BATCH_PARAMS: usize = 4 + 3 * MAX_BLOCKS;
+/// Doubles per result: `peakUp`, `peakApAbs`, `Einput`, `nEvents`,
+/// `nAmbiguous`, then `peakSlip[1..8]` (0 beyond `nBlocks`).
+pub const BATCH_OUTPUTS: usize = 5 + MAX_BLOCKS;
+
+/// Runs `nSets` parameter sets over one record.
+///
+/// - `recordFile`: a PEER `.AT2` (in g, converted with `g`) or CSV
+///   `time,accel` (m/s²) file, as the FMU's `recordFile` (an absolute or
+///   working-directory-relative path); multiplied by `recordScale`.
+/// - `params`: `nSets` × 28 doubles per set: nBlocks, mp, Tp, zeta, alpha[1..8], mus[1..8], muk[1..8].
+/// - `outputs`: room for `nSets` × 13 doubles: peakUp, peakApAbs, Einput, nEvents, nAmbiguous,
+///   peakSlip[1..8].
+/// - `message`, `messageSize`: a buffer for the error message (may be NULL).
+///
+/// Returns 0 (fmi2OK), or 3 (fmi2Error) with a message naming the set and
+/// the variable and its allowed range, or the record's file, line and
+/// problem; the results of the sets before a bad one are written. A panic
+/// never crosses this boundary (it is reported as an error).
+#[no_mangle]
+pub unsafe extern "C" fn sllRunBatch(
+    recordFile: *const c_char,
+    g: f64,
+    recordScale: f64,
+    nSets: c_int,
+    params: *const f64,
+    outputs: *mut f64,
+    message: *mut c_char,
+    messageSize: usize,
+) -> c_int {
+    let result = catch_unwind(AssertUnwindSafe(|| {
+        if recordFile.is_null() || (nSets > 0 && (params.is_null() || outputs.is_null())) {
+            return Err("recordFile, params and outputs must not be NULL".to_string());
+        }
+        if nSets < 0 {
+            return Err(format!("nSets = {nSets} is not allowed: it must be >= 0"));
+        }
+        // The FMU's ranges (params::RANGES), with their messages.
+        check_scalar("g", g).map_err(|e| e.to_string())?;
+        check_scalar("recordScale", recordScale).map_err(|e| e.to_string())?;
+        let path = CStr::from_ptr(recordFile).to_string_lossy().into_owned();
+        let gm = GroundMotion::read(std::path::Path::new(&path), g)
+            .map_err(|e| format!("recordFile: {e}"))?;
+        let n = nSets as usize;
+        let params = std::slice::from_raw_parts(params, n * BATCH_PARAMS);
+        let outputs = std::slice::from_raw_parts_mut(outputs, n * BATCH_OUTPUTS);
+        for (set, (p, out)) in params
+            .chunks_exact(BATCH_PARAMS)
+            .zip(outputs.chunks_exact_mut(BATCH_OUTPUTS))
+            .enumerate()
+        {
+            run_set(p, g, &gm, recordScale, out).map_err(|e| format!("set {set}: {e}"))?;
+        }
+        Ok(())
+    }));
+    let error = match result {
+        Ok(Ok(())) => return 0,
+        Ok(Err(e)) => e,
+        Err(_) => "internal error (a panic was caught)".to_string(),
+    };
+    if !message.is_null() && messageSize > 0 {
+        let text = format!("sllRunBatch: {error}");
+        let len = text.len().min(messageSize - 1);
+        std::ptr::copy_nonoverlapping(text.as_ptr() as *const c_char, message, len);
+        *message.add(len) = 0;
+    }
+    3
+}
+
+/// One parameter set over the record.
+fn run_set(
+    p: &[f64],
+    g: f64,
+    gm: &GroundMotion,
+    scale: f64,
+    out: &mut [f64],
+) -> Result<(), String> {
+    let n = p[0];
+    if !(n.fract() == 0.0 && (0.0..=MAX_BLOCKS as f64).contains(&n)) {
+        return Err(format!(
+            "nBlocks = {n} is not allowed: it must be an integer from 0 to 8"
+        ));
+    }
+    let b = MAX_BLOCKS;
+    let mut params = Params {
+        n_blocks: n as usize,
+        mp: p[1],
+        tp: p[2],
+        zeta: p[3],
+        g,
+        ..Params::default()
+    };
+    params.alpha.copy_from_slice(&p[4..4 + b]);
+    params.mus.copy_from_slice(&p[4 + b..4 + 2 * b]);
+    params.muk.copy_from_slice(&p[4 + 2 * b..4 + 3 * b]);
+    let mut sim = Simulator::new(&params, &Settings::default()).map_err(|e| e.to_string())?;
+    record::run(&mut sim, gm, scale).map_err(|e| e.to_string())?;
+    let o = sim.outputs();
+    out[..5].copy_from_slice(&[
+        o.peak_up,
+        o.peak_ap_abs,
+        o.e_input,
+        o.n_events as f64,
+        o.n_ambiguous as f64,
+    ]);
+    out[5..].copy_from_slice(&o.peak_slip);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::ffi::CString;
+
+    #[test]
+    fn a_batch_equals_single_runs_and_names_a_bad_set() {
+        // Expected values: the engine run set by set (what the FMU does with
+        // `recordFile` in one step), bit for bit.
+        let dir = std::env::temp_dir().join(format!("sll_batch_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("rec.csv");
+        let gm = crate::synthetic::broadband(4.0, 0.01, 3.0);
+        let csv: String = gm
+            .time
+            .iter()
+            .zip(&gm.accel)
+            .map(|(t, a)| format!("{t:.17e},{a:.17e}\n"))
+            .collect();
+        std::fs::write(&file, csv).unwrap();
+        let read = GroundMotion::read(&file, 9.81).unwrap();
+        let mut sets = Vec::new();
+        for (n, tp) in [(0usize, 0.3), (2, 0.5), (3, 1.2)] {
+            let mut p = vec![n as f64, 1000.0, tp, 0.05];
+            p.extend([0.2; 8]);
+            p.extend([0.1; 8]);
+            p.extend([0.08; 8]);
+            sets.extend(p);
+        }
+        let mut out = vec![0.0; 3 * BATCH_OUTPUTS];
+        let path = CString::new(file.to_str().unwrap()).unwrap();
+        let mut msg = [0 as c_char; 200];
+        let status = unsafe {
+            sllRunBatch(
+                path.as_ptr(),
+                9.81,
+                1.0,
+                3,
+                sets.as_ptr(),
+                out.as_mut_ptr(),
+                msg.as_mut_ptr(),
+                200,
+            )
+        };
+        assert_eq!(status, 0);
+        for (k, p) in sets.chunks(BATCH_PARAMS).enumerate() {
+            let mut want = vec![0.0; BATCH_OUTPUTS];
+            run_set(p, 9.81, &read, 1.0, &mut want).unwrap();
+            assert_eq!(&out[k * BATCH_OUTPUTS..(k + 1) * BATCH_OUTPUTS], &want[..]);
+        }
+        assert!(out[BATCH_OUTPUTS + 3] > 0.0, "the 2-block set switches");
+        // A bad set is named with its variable.
+        sets[BATCH_PARAMS + 2] = -1.0;
+        let status = unsafe {
+            sllRunBatch(
+                path.as_ptr(),
+                9.81,
+                1.0,
+                3,
+                sets.as_ptr(),
+                out.as_mut_ptr(),
+                msg.as_mut_ptr(),
+                200,
+            )
+        };
+        let text = unsafe { CStr::from_ptr(msg.as_ptr()) }.to_string_lossy();
+        assert_eq!(status, 3);
+        assert!(text.starts_with("sllRunBatch: set 1: Tp = -1"), "{text}");
+        let status = unsafe {
+            sllRunBatch(
+                std::ptr::null(),
+                9.81,
+                1.0,
+                1,
+                sets.as_ptr(),
+                out.as_mut_ptr(),
+                msg.as_mut_ptr(),
+                200,
+            )
+        };
+        assert_eq!(status, 3);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
