@@ -5,7 +5,9 @@
 //! of the bare structure over the same samples.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use stacked_live_load::{record, sdof, GroundMotion, Method, Params, Settings, Simulator};
+use stacked_live_load::{
+    ground::record, physics::sdof, GroundMotion, Method, Params, Settings, Simulator,
+};
 use std::path::PathBuf;
 
 fn record_20s() -> GroundMotion {

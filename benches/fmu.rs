@@ -5,7 +5,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use stacked_live_load::fmi::c_api::*;
-use stacked_live_load::{record, GroundMotion, Params, Settings, Simulator};
+use stacked_live_load::{ground::record, GroundMotion, Params, Settings, Simulator};
 use std::ffi::CString;
 use std::path::PathBuf;
 

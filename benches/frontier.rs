@@ -17,7 +17,7 @@
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use stacked_live_load::{record, sdof, GroundMotion, Params, Settings, Simulator};
+use stacked_live_load::{ground::record, physics::sdof, GroundMotion, Params, Settings, Simulator};
 use std::hint::black_box;
 use std::time::Instant;
 

@@ -1,7 +1,7 @@
 //! The engine alone on the embedded default record: the paper's Fig. 5a
 //! scene, and the rigid and single-block configurations for comparison.
 
-use stacked_live_load::{record, synthetic, Params, Settings, Simulator};
+use stacked_live_load::{ground::record, ground::synthetic, Params, Settings, Simulator};
 
 fn main() {
     let stack = Params::default();

@@ -3,7 +3,7 @@
 //! record's samples (a 2x2 affine map per sample), 31 rounds.
 //!
 //! `cargo run --release --example floor -- RECORD [Tp] [zeta]`
-use stacked_live_load::{sdof, GroundMotion};
+use stacked_live_load::{physics::sdof, GroundMotion};
 use std::hint::black_box;
 use std::time::Instant;
 

@@ -11,6 +11,8 @@
 //!   it falls), 20 s;
 //! - `height`: 0 to 8 blocks (`benches/frontier.rs`'s scenes), 20 s.
 
+use stacked_live_load::ground::{record, synthetic};
+use stacked_live_load::physics::sdof;
 use stacked_live_load::*;
 use std::hint::black_box;
 use std::time::Instant;

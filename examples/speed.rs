@@ -1,4 +1,6 @@
 //! Times one 20 s simulation (for profiling; the figures are `cargo bench`'s).
+use stacked_live_load::ground::{record, synthetic};
+use stacked_live_load::physics::sdof;
 use stacked_live_load::*;
 fn main() {
     let n: usize = std::env::args()

@@ -3,8 +3,8 @@
 //! fmi2OK, and messages that quote only a few characters of a file.
 //! `docs/robustness.md` lists them with what each bad input gets.
 
-use crate::engine::Outputs;
-use crate::params::MAX_BLOCKS;
+use crate::physics::engine::Outputs;
+use crate::physics::params::MAX_BLOCKS;
 
 /// Largest record file read (bytes): 10 million CSV samples fit with room.
 pub const MAX_RECORD_BYTES: u64 = 512 << 20;

@@ -3,6 +3,8 @@
 
 mod common;
 use common::*;
+use stacked_live_load::ground::record;
+use stacked_live_load::physics::sdof;
 use stacked_live_load::*;
 use std::f64::consts::PI;
 

@@ -42,7 +42,7 @@ fn records() -> Vec<(&'static str, GroundMotion)> {
         ("broadband 0.4 g", broadband(20.0, 0.005, 0.4 * 9.81)),
         (
             "default (Zone V matched)",
-            stacked_live_load::synthetic::default_record(),
+            stacked_live_load::ground::synthetic::default_record(),
         ),
         (
             "Loma Prieta SLC270",

@@ -4,7 +4,7 @@
 mod common;
 use stacked_live_load::fmi::instance::{Instance, LogSink, Phase, Status};
 use stacked_live_load::fmi::variables::Id;
-use stacked_live_load::{record, GroundMotion, Params, Settings, Simulator};
+use stacked_live_load::{ground::record, GroundMotion, Params, Settings, Simulator};
 use std::sync::{Arc, Mutex};
 
 #[derive(Clone, Default)]

@@ -378,8 +378,8 @@ fn parameters_outside_their_range_are_refused_naming_range() {
         assert!(m.contains("it must be"), "{m}");
     }
     // Both ends of every range are allowed, values just outside are not.
-    for &(name, lo, hi, _) in &stacked_live_load::params::RANGES {
-        use stacked_live_load::params::check_scalar;
+    for &(name, lo, hi, _) in &stacked_live_load::physics::params::RANGES {
+        use stacked_live_load::physics::params::check_scalar;
         let hi_ok = if name == "zeta" {
             hi * (1.0 - 1e-12)
         } else {
@@ -582,7 +582,8 @@ fn random_instance(rng: &mut Rng, dir: &Path) -> Instance {
         let seed = rng.below(16);
         let file = dir.join(format!("fuzz_{seed}.csv"));
         if !file.exists() {
-            let gm = stacked_live_load::synthetic::broadband(4.0, 0.01, rng.uniform(1.0, 8.0));
+            let gm =
+                stacked_live_load::ground::synthetic::broadband(4.0, 0.01, rng.uniform(1.0, 8.0));
             let text: String = gm
                 .time
                 .iter()

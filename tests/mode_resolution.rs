@@ -5,8 +5,8 @@
 
 mod common;
 use common::Rng;
-use stacked_live_load::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
-use stacked_live_load::system::System;
+use stacked_live_load::physics::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
+use stacked_live_load::physics::system::System;
 use stacked_live_load::Params;
 
 struct Case {

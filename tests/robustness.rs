@@ -6,6 +6,7 @@
 
 mod common;
 use common::*;
+use stacked_live_load::ground::record;
 use stacked_live_load::*;
 
 #[test]

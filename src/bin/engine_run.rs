@@ -4,7 +4,7 @@
 //! engine_run RECORD [--hold] [--scale S] [--g G]
 //!   --hold: the record is held constant over each sample interval (what an
 //!           importer without input derivatives gives); default: linear.
-use stacked_live_load::{record, Excitation, GroundMotion, Params, Settings, Simulator};
+use stacked_live_load::{ground::record, Excitation, GroundMotion, Params, Settings, Simulator};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();

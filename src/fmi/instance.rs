@@ -3,14 +3,14 @@
 //! simulator, status queries and saved states. The C ABI in [`crate::fmi::c_api`]
 //! only checks pointers, converts arguments and calls in here.
 
-use crate::engine::{Excitation, Outputs};
 use crate::fmi::ports;
 use crate::fmi::variables::{Causality, Id};
+use crate::ground::record::{self, GroundMotion};
 use crate::limits::{self, MAX_PATH_BYTES};
-use crate::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
-use crate::record::{self, GroundMotion};
-use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
-use crate::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
+use crate::physics::engine::{Excitation, Outputs};
+use crate::physics::params::{check_scalar, ParamError, Params, MAX_BLOCKS};
+use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
+use crate::physics::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 

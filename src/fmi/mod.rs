@@ -1,4 +1,4 @@
-//! The FMU: the FMI 2.0 layer over the physics. It knows the variables and
+//! The FMU: the FMI 2.0 layer over the physics and the ground motion. It knows the variables and
 //! the FMI state machine, nothing of friction beyond the variable table.
 //!
 //! - [`c_api`]: the exported C functions (thin, panic-safe wrappers).
@@ -6,7 +6,10 @@
 //! - [`variables`]: the variable table (names, value references, starts).
 //! - [`model_description`]: `modelDescription.xml`, generated from the table.
 //! - [`ports`]: the outputs' input dependencies and time derivatives.
+//! - [`batch`]: `sllRunBatch`, many parameter sets over one record in one
+//!   call (beside the FMI API, for parametric studies).
 
+pub mod batch;
 pub mod c_api;
 pub mod instance;
 pub mod model_description;

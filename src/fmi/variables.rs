@@ -2,7 +2,7 @@
 //! generated `modelDescription.xml` read. Names and value references are the
 //! public interface; value references are unique across all types.
 
-use crate::params::{Params, MAX_BLOCKS};
+use crate::physics::params::{Params, MAX_BLOCKS};
 
 /// What a variable is. Each variant is the FMU variable of the same name
 /// (see [`Id::name`]); indexed variants carry the block / interface number 1..=8.
@@ -393,7 +393,7 @@ pub fn table() -> Vec<Variable> {
     add(
         Id::FrictionEps,
         Some("Velocity"),
-        real(crate::solver::DEFAULT_FRICTION_EPS),
+        real(crate::physics::solver::DEFAULT_FRICTION_EPS),
         "Solver 3 only: friction is -muk N tanh(v / frictionEps)",
     );
     add(

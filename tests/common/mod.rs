@@ -11,8 +11,8 @@
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, DVector};
-use stacked_live_load::mode::{self, Contact, Mode, ResolveRequest};
-use stacked_live_load::system::System;
+use stacked_live_load::physics::mode::{self, Contact, Mode, ResolveRequest};
+use stacked_live_load::physics::system::System;
 use stacked_live_load::{GroundMotion, Params};
 use std::f64::consts::PI;
 use std::path::PathBuf;
@@ -47,7 +47,7 @@ pub fn scaled_to_pga(gm: &GroundMotion, pga: f64) -> GroundMotion {
 }
 
 #[allow(unused_imports)]
-pub use stacked_live_load::synthetic::broadband;
+pub use stacked_live_load::ground::synthetic::broadband;
 
 /// Matrix exponential by scaling and squaring of a degree-20 Taylor sum.
 pub fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
@@ -462,8 +462,14 @@ pub fn run_sampled(
     mut each: impl FnMut(&stacked_live_load::Simulator),
 ) {
     for &t in &gm.time[1..] {
-        stacked_live_load::record::advance_with_record(sim, t, gm, 1.0, &Default::default())
-            .unwrap();
+        stacked_live_load::ground::record::advance_with_record(
+            sim,
+            t,
+            gm,
+            1.0,
+            &Default::default(),
+        )
+        .unwrap();
         each(sim);
     }
 }

@@ -4,9 +4,9 @@
 
 use super::{Dynamic, Phase};
 use crate::limits::MAX_PATH_BYTES;
-use crate::params::{check_scalar, MAX_BLOCKS};
-use crate::snapshot::SnapshotError;
-use crate::solver::{Solver, SolverKind, Stepper};
+use crate::physics::params::{check_scalar, MAX_BLOCKS};
+use crate::physics::snapshot::SnapshotError;
+use crate::physics::solver::{Solver, SolverKind, Stepper};
 
 /// Every field of a deserialized state, beyond what the engine checks of its
 /// own: times, parameters in range, a solver that is the one its parameters

@@ -18,7 +18,7 @@
 //! the substep, which let the fast path prove that no guard changes sign and
 //! that no peak is missed between the substep's ends.
 
-use crate::system::System;
+use crate::physics::system::System;
 
 /// Highest degree of the Taylor sum of `exp(A h)`; a map stops at the first
 /// degree whose terms are below 1e-20 of the first ([`degree`]).
@@ -247,7 +247,7 @@ impl MapCache {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::params::Params;
+    use crate::physics::params::Params;
 
     #[test]
     fn the_map_is_the_exact_solution() {
@@ -260,7 +260,7 @@ mod tests {
         let zeta = p.zeta;
         let (u0, v0, p0, p1) = (0.013, -0.21, 2.5, -310.0);
         let z = [u0, v0, p0, p1];
-        let (u1, v1) = crate::sdof::step(sys.omega_p, zeta, h, (u0, v0), p0, p0 + p1 * h);
+        let (u1, v1) = crate::physics::sdof::step(sys.omega_p, zeta, h, (u0, v0), p0, p0 + p1 * h);
         assert!(
             (dot(&map.u, &z) - u1).abs() < 1e-15,
             "{} {u1}",
@@ -283,7 +283,7 @@ mod tests {
             let (u, v) = if k == 0 {
                 (u0, v0)
             } else {
-                crate::sdof::step(sys.omega_p, zeta, tau, (u0, v0), p0, p0 + p1 * tau)
+                crate::physics::sdof::step(sys.omega_p, zeta, tau, (u0, v0), p0, p0 + p1 * tau)
             };
             iu += w * u;
             iv2 += w * v * v;

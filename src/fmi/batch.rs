@@ -8,8 +8,8 @@
 //! parameters and `recordFile` does in one `fmi2DoStep` over the record.
 #![allow(non_snake_case, clippy::missing_safety_doc)]
 
-use crate::params::{check_scalar, Params, Settings, MAX_BLOCKS};
-use crate::record::{self, GroundMotion};
+use crate::ground::record::{self, GroundMotion};
+use crate::physics::params::{check_scalar, Params, Settings, MAX_BLOCKS};
 use crate::Simulator;
 use std::ffi::{c_char, c_int, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -138,7 +138,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("sll_batch_{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("rec.csv");
-        let gm = crate::synthetic::broadband(4.0, 0.01, 3.0);
+        let gm = crate::ground::synthetic::broadband(4.0, 0.01, 3.0);
         let csv: String = gm
             .time
             .iter()

@@ -4,9 +4,9 @@
 //! the simulator was built; these are the dynamic fields.
 
 use super::Simulator;
-use crate::mode::{Contact, Mode};
-use crate::params::MAX_BODIES;
-use crate::snapshot::SnapshotError;
+use crate::physics::mode::{Contact, Mode};
+use crate::physics::params::MAX_BODIES;
+use crate::physics::snapshot::SnapshotError;
 
 impl Simulator {
     /// The contact states: free exactly where mus = 0, as a fresh scene's

@@ -5,12 +5,12 @@
 //! linear, before the first and after the last it is zero. An `.AT2` file's
 //! first value is at t = 0 and the n-th at n DT.
 
-use crate::engine::{Excitation, SimError};
 use crate::limits::{
     quote, MAX_RECORD_ACCEL, MAX_RECORD_BYTES, MAX_RECORD_LINE, MAX_RECORD_SAMPLES,
     MAX_RECORD_TIME, MIN_RECORD_DT,
 };
-use crate::solver::Stepper;
+use crate::physics::engine::{Excitation, SimError};
+use crate::physics::solver::Stepper;
 use std::fmt;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Take};
@@ -596,7 +596,7 @@ mod tests {
         pieces: Vec<(f64, f64, f64)>,
     }
 
-    impl crate::solver::Stepper for Recorder {
+    impl crate::physics::solver::Stepper for Recorder {
         fn time(&self) -> f64 {
             self.t
         }

@@ -1,7 +1,7 @@
 //! Physical constants derived from validated [`Params`]: masses, stiffness,
 //! damping and the normal force of every interface.
 
-use crate::params::{ParamError, Params, MAX_BODIES};
+use crate::physics::params::{ParamError, Params, MAX_BODIES};
 use std::f64::consts::PI;
 
 /// Body 0 is the structure; bodies 1..=n are blocks. Interface arrays are

@@ -183,7 +183,7 @@ pub struct Settings {
     /// How mode switches are handled.
     pub method: Method,
     /// Largest internal step (s). 0 selects the automatic accuracy bound
-    /// (see [`crate::engine::auto_step`]); a positive value replaces it, but
+    /// (see [`crate::physics::engine::auto_step`]); a positive value replaces it, but
     /// the RK4 stability bound of the bare structure always applies.
     pub max_step: f64,
 }

@@ -2,7 +2,7 @@
 //! of the embedded default record, and a test signal), and the embedded
 //! default record itself, so that the demo needs no file.
 
-use crate::record::GroundMotion;
+use crate::ground::record::GroundMotion;
 use std::f64::consts::PI;
 
 /// A sum of 40 sines log-spaced from 0.2 to 20 Hz, amplitudes falling as
@@ -41,7 +41,7 @@ pub fn broadband(duration: f64, dt: f64, pga: f64) -> GroundMotion {
 /// broadband seed (20 s at 0.005 s) matched to the IS 1893 (Part 1):2016 Zone V
 /// hard-soil DBE spectrum by `scripts/ground_motions.py default`.
 pub fn default_record() -> GroundMotion {
-    const CSV: &str = include_str!("../resources/default_record.csv");
+    const CSV: &str = include_str!("../../resources/default_record.csv");
     GroundMotion::from_csv_text(CSV, "resources/default_record.csv")
         .expect("the embedded record is valid")
 }

@@ -11,8 +11,8 @@
 //! the ground acceleration drops out of every force and of every relative
 //! acceleration, so stick/slip decisions never depend on `ag`.
 
-use crate::params::MAX_BODIES;
-use crate::system::System;
+use crate::physics::params::MAX_BODIES;
+use crate::physics::system::System;
 
 /// State of one interface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -491,7 +491,7 @@ fn bits_to_ifaces(bits: u32, list: &[usize]) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::params::Params;
+    use crate::physics::params::Params;
 
     #[test]
     fn subsets_come_in_the_order_of_a_full_scan() {

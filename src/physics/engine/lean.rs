@@ -21,10 +21,10 @@
 
 use super::rk4_map::{Forced, Inputs, Rk4Map, StepEnd};
 use super::{upper_cluster_step, Excitation, Piece, Simulator};
-use crate::hermite;
-use crate::mode::{Dynamics, Guard};
-use crate::params::MAX_BODIES;
-use crate::system::System;
+use crate::physics::hermite;
+use crate::physics::mode::{Dynamics, Guard};
+use crate::physics::params::MAX_BODIES;
+use crate::physics::system::System;
 
 /// A relative difference of step lengths above which the affine map is
 /// built again; below it the difference is rounding of the piece's end
@@ -448,8 +448,8 @@ impl<'a> Stepping<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mode::{Contact, Mode};
-    use crate::params::Params;
+    use crate::physics::mode::{Contact, Mode};
+    use crate::physics::params::Params;
 
     /// A 2-block scene with block 1 sliding forward on the structure, so
     /// that the structure's cluster carries a constant friction load.

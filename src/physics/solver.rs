@@ -2,11 +2,11 @@
 //! scene. 1 and 2 are the exact stick/slip engine with located or step-end
 //! switching; 3 is the tanh-regularized baseline (not a recommended mode).
 
-use crate::engine::{self, Excitation, Outputs, SimError, Simulator};
-use crate::params::{check_scalar, Method, ParamError, Params, Settings, MIN_MAX_STEP};
-use crate::regularized::{self, RegularizedSimulator};
-use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
-use crate::system::System;
+use crate::physics::engine::{self, Excitation, Outputs, SimError, Simulator};
+use crate::physics::params::{check_scalar, Method, ParamError, Params, Settings, MIN_MAX_STEP};
+use crate::physics::regularized::{self, RegularizedSimulator};
+use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
+use crate::physics::system::System;
 
 /// Anything that advances in time under a linear excitation piece.
 pub trait Stepper {

@@ -96,7 +96,7 @@ impl<'a> ByteReader<'a> {
     }
 }
 
-use crate::params::Params;
+use crate::physics::params::Params;
 
 impl Params {
     /// Writes every field in a fixed order (part of saved states).

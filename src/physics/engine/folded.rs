@@ -24,9 +24,9 @@
 use super::exact_map::{canonical_length, dot, ExactMap, MAP_H_OMEGA};
 use super::lean::{safe_accel_band, UpperClusters};
 use super::{Excitation, Piece, Simulator};
-use crate::hermite;
-use crate::mode::{Dynamics, Guard};
-use crate::params::MAX_BODIES;
+use crate::physics::hermite;
+use crate::physics::mode::{Dynamics, Guard};
+use crate::physics::params::MAX_BODIES;
 
 /// The structure cluster at the end of a substep.
 #[derive(Clone, Copy, Debug)]

@@ -6,8 +6,8 @@
 //! path's stage-by-stage RK4).
 
 use super::Excitation;
-use crate::mode::Dynamics;
-use crate::system::System;
+use crate::physics::mode::Dynamics;
+use crate::physics::system::System;
 
 /// The structure's cluster at the end of a fast-path step.
 #[derive(Clone, Copy, Debug)]
@@ -233,9 +233,9 @@ fn rk4_stages(w2: f64, cm: f64, h: f64, [u, v, f0, f1]: [f64; 4]) -> [f64; 5] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::StructureRk4;
-    use crate::mode::{Contact, Mode};
-    use crate::params::Params;
+    use crate::physics::engine::StructureRk4;
+    use crate::physics::mode::{Contact, Mode};
+    use crate::physics::params::Params;
 
     fn close(a: f64, b: f64, scale: f64) -> bool {
         (a - b).abs() <= 1e-13 * scale

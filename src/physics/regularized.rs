@@ -6,13 +6,13 @@
 //! equations stiff (eigenvalues about mu g (1 + alpha) / eps), and without
 //! a step bound RK4 diverges above h omega = 2.83 (RESEARCH.md §2).
 //! [`stable_step`] gives the bound for a whole stack; the FMU's solver 3
-//! never steps above it (see [`crate::solver::Solver::new`]).
+//! never steps above it (see [`crate::physics::solver::Solver::new`]).
 
-use crate::engine::{Excitation, Outputs, SimError};
-use crate::hermite;
-use crate::params::{ParamError, Params, MAX_BODIES};
-use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
-use crate::system::System;
+use crate::physics::engine::{Excitation, Outputs, SimError};
+use crate::physics::hermite;
+use crate::physics::params::{ParamError, Params, MAX_BODIES};
+use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
+use crate::physics::system::System;
 
 /// Full state: u and v of every body, then input, viscous and friction work.
 const STATE: usize = 2 * MAX_BODIES + 3;
@@ -150,7 +150,7 @@ impl RegularizedSimulator {
     fn check_restored(&self) -> Result<(), SnapshotError> {
         let n = self.sys.n;
         let stable = stable_step(&self.sys, self.eps).0;
-        if !(self.step >= crate::params::MIN_MAX_STEP && self.step <= stable) {
+        if !(self.step >= crate::physics::params::MIN_MAX_STEP && self.step <= stable) {
             return Err(format!(
                 "internal step {} s of the saved state is outside [1e-7, {stable:e}] s",
                 self.step
@@ -256,7 +256,7 @@ impl RegularizedSimulator {
                 exc.fext + exc.fext_rate * (t - t_ref),
             )
         };
-        let n_steps = crate::engine::substeps(t_end - t_ref, self.step) as usize;
+        let n_steps = crate::physics::engine::substeps(t_end - t_ref, self.step) as usize;
         let h = (t_end - t_ref) / n_steps as f64;
         for i in 0..n_steps {
             let t0 = t_ref + i as f64 * h;

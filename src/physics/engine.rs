@@ -7,11 +7,11 @@
 //! quadratures into a short vector, integrates it, and moves every body of a
 //! cluster by its cluster's increment.
 
-use crate::hermite;
-use crate::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
-use crate::params::{Method, ParamError, Params, Settings, MAX_BLOCKS, MAX_BODIES};
-use crate::snapshot::{ByteReader, ByteWriter, SnapshotError};
-use crate::system::System;
+use crate::physics::hermite;
+use crate::physics::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
+use crate::physics::params::{Method, ParamError, Params, Settings, MAX_BLOCKS, MAX_BODIES};
+use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
+use crate::physics::system::System;
 
 mod exact_map;
 mod folded;
