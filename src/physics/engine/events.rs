@@ -1,0 +1,333 @@
+//! Stick/slip events: the guards of a step's segment, their location by
+//! Illinois iteration on RK4 re-steps, firing a contact and resolving the
+//! mode, and the located and step-end switching steps.
+
+use super::*;
+
+/// One step's frozen ingredients: the mode, the excitation, and every
+/// body's state at the step start `t0`.
+///
+/// Only the structure's cluster is integrated by RK4 stages. Every other
+/// cluster has a constant absolute acceleration in the mode, so RK4 on it
+/// reduces exactly to its Taylor polynomial (u cubic, v quadratic in time)
+/// and RK4's quadrature of its input power `ag v` to Simpson's rule, exact for
+/// that cubic: they are evaluated in closed form at any instant of the step.
+pub(super) struct Segment<'a> {
+    pub(super) sys: &'a System,
+    pub(super) mode: &'a Mode,
+    pub(super) dynamics: &'a Dynamics,
+    pub(super) exc: Excitation,
+    pub(super) rk: StructureRk4,
+    pub(super) t0: f64,
+    pub(super) ag0: f64,
+    pub(super) u: &'a [f64; MAX_BODIES],
+    pub(super) v: &'a [f64; MAX_BODIES],
+}
+
+impl Segment<'_> {
+    pub(super) fn start(&self) -> Structure {
+        [self.u[0], self.v[0], 0.0, 0.0]
+    }
+
+    /// The structure's cluster after one RK4 step of length `tau` from `t0`.
+    pub(super) fn structure_after(&self, tau: f64) -> Structure {
+        self.rk.step(self.t0, self.u[0], self.v[0], tau)
+    }
+
+    /// Velocity of cluster `c` at `t0 + tau`; `x` is the structure's cluster then.
+    #[inline]
+    pub(super) fn velocity(&self, c: usize, x: &Structure, tau: f64) -> f64 {
+        if c == 0 {
+            x[1]
+        } else {
+            let d = self.dynamics;
+            self.v[d.bottom[c]] + tau * (d.accel_const[c] - self.ag0)
+                - 0.5 * tau * tau * self.exc.ag_rate
+        }
+    }
+
+    /// Guard of interface j at `t0 + tau`: positive while its contact state holds.
+    pub(super) fn guard(&self, j: usize, x: &Structure, tau: f64) -> f64 {
+        let d = self.dynamics;
+        match self.mode.contact[j] {
+            Contact::Stuck => {
+                // Same slack as the resolver's consistency check, so that a
+                // stick it accepted starts with a guard >= 0. In a stack with
+                // equal friction coefficients the stick force of a block riding
+                // on a sliding one is exactly mus N; without the slack rounding
+                // alone would make it chatter.
+                let (_, fext) = self.rk.inputs(self.t0 + tau);
+                let load0 = Dynamics::structure_load(self.sys, x[0], x[1], fext);
+                let f = d.force(j, self.mode, load0);
+                mode::stick_capacity(self.sys, j) - f.abs()
+            }
+            Contact::SlipForward | Contact::SlipBackward => {
+                let v_rel = self.velocity(d.cluster_of[j], x, tau)
+                    - self.velocity(d.cluster_of[j - 1], x, tau);
+                self.mode.contact[j].slip_sign() * v_rel
+            }
+            Contact::Free => f64::INFINITY,
+        }
+    }
+
+    /// Guard j after `theta h`, re-stepping RK4 from the step start.
+    pub(super) fn guard_at(&self, j: usize, theta: f64, h: f64) -> f64 {
+        self.guard(j, &self.structure_after(theta * h), theta * h)
+    }
+
+    /// Instant (as a fraction of `h`) where guard j crosses zero, bracketed
+    /// between `a` (guard > 0) and `b` (guard <= 0); returns the right end of
+    /// the final bracket, where the guard has already changed sign. Illinois
+    /// iteration on RK4 re-steps from the step start.
+    pub(super) fn locate(&self, j: usize, h: f64, bracket: [(f64, f64); 2]) -> f64 {
+        let [(mut a, mut ga), (mut b, mut gb)] = bracket;
+        let tol = EVENT_TIME_TOL / h;
+        let mut side = 0i8;
+        for iter in 0..200 {
+            if b - a <= tol {
+                break;
+            }
+            let mut c = (a * gb - b * ga) / (gb - ga);
+            // Fall back to bisection when the secant stalls or leaves the bracket.
+            if !(c > a && c < b) || iter >= 60 {
+                c = 0.5 * (a + b);
+            }
+            let gc = self.guard_at(j, c, h);
+            if gc > 0.0 {
+                a = c;
+                ga = gc;
+                if side == 1 {
+                    gb *= 0.5;
+                }
+                side = 1;
+            } else {
+                b = c;
+                gb = gc;
+                if side == -1 {
+                    ga *= 0.5;
+                }
+                side = -1;
+            }
+        }
+        b
+    }
+}
+
+impl Simulator {
+    /// Interfaces whose relative velocity is exactly zero (free ones excluded).
+    pub(super) fn zero_mask(&self) -> u32 {
+        let mut z = 0;
+        for j in 1..=self.sys.n {
+            if !self.sys.is_free(j) && self.v[j] == self.v[j - 1] {
+                z |= 1 << j;
+            }
+        }
+        z
+    }
+
+    pub(super) fn stuck_mask(&self) -> u32 {
+        (1..=self.sys.n)
+            .filter(|&j| self.mode.is_stuck(j))
+            .fold(0, |m, j| m | (1 << j))
+    }
+
+    /// Re-resolves the mode at the current state; counts a switch if it changed.
+    pub(super) fn resolve_mode(&mut self, must_break: u32) {
+        let req = ResolveRequest {
+            mode: self.mode,
+            zero: self.zero_mask(),
+            must_break,
+            was_stuck: self.stuck_mask(),
+            load0: self.load0(),
+        };
+        let res = mode::resolve(&self.sys, &req);
+        if !res.consistent {
+            self.stats.inconsistent += 1;
+        } else if req.zero != 0 && mode::consistent_count(&self.sys, &req) > 1 {
+            self.stats.ambiguous += 1;
+        }
+        if res.mode != self.mode {
+            self.stats.events += 1;
+            self.last_event = self.t;
+            if self.first_switch.is_nan() && self.t >= self.watch_from {
+                self.first_switch = self.t;
+            }
+            self.mode = res.mode;
+            self.dynamics = Dynamics::new(&self.sys, &self.mode);
+        }
+    }
+
+    /// Acts on guards that have fired at the current instant: a slipping
+    /// interface whose relative velocity reached zero gets its two sides
+    /// joined at their common momentum velocity; a stuck interface whose
+    /// force reached `mus N` must break. Then the mode is resolved.
+    pub(super) fn fire(&mut self, slip_zeroed: u32, must_break: u32) {
+        if slip_zeroed != 0 {
+            self.join_velocities(slip_zeroed);
+        }
+        self.resolve_mode(must_break);
+    }
+
+    /// Sets one common velocity, the momentum average, on every group of
+    /// bodies linked by stuck interfaces or by the interfaces in `joined`.
+    pub(super) fn join_velocities(&mut self, joined: u32) {
+        let n = self.sys.n;
+        let mut start = 0;
+        for j in 1..=n + 1 {
+            let linked = j <= n && (self.mode.is_stuck(j) || joined & (1 << j) != 0);
+            if linked {
+                continue;
+            }
+            // Bodies start..j-1 form a group.
+            let group = start..j;
+            let has_join = (start + 1..j).any(|i| joined & (1 << i) != 0);
+            if has_join {
+                let m: f64 = group.clone().map(|i| self.sys.mass[i]).sum();
+                let p: f64 = group.clone().map(|i| self.sys.mass[i] * self.v[i]).sum();
+                let v = p / m;
+                for i in group {
+                    self.v[i] = v;
+                }
+            }
+            start = j;
+        }
+    }
+
+    /// Guards of the current mode at the current state (infinite for free
+    /// interfaces and for j > n).
+    pub(super) fn guards_now(&self, exc: &Excitation, t_ref: f64) -> [f64; MAX_BODIES] {
+        let seg = self.segment(exc, t_ref);
+        let x = seg.start();
+        let mut g = [f64::INFINITY; MAX_BODIES];
+        for (j, gj) in g.iter_mut().enumerate().take(self.sys.n + 1).skip(1) {
+            *gj = seg.guard(j, &x, 0.0);
+        }
+        g
+    }
+
+    /// Fires the guards in `forced` and every guard among `candidates`
+    /// that is zero or negative now.
+    pub(super) fn fire_violated(
+        &mut self,
+        exc: &Excitation,
+        t_ref: f64,
+        candidates: u32,
+        forced: u32,
+    ) -> bool {
+        let g = self.guards_now(exc, t_ref);
+        let (mut slip_zeroed, mut must_break) = (0, 0);
+        for j in 1..=self.sys.n {
+            let hit = forced & (1 << j) != 0 || (candidates & (1 << j) != 0 && g[j] <= 0.0);
+            if hit {
+                match self.mode.contact[j] {
+                    Contact::Stuck => must_break |= 1 << j,
+                    Contact::SlipForward | Contact::SlipBackward => slip_zeroed |= 1 << j,
+                    Contact::Free => {}
+                }
+            }
+        }
+        if slip_zeroed | must_break != 0 {
+            self.fire(slip_zeroed, must_break);
+            true
+        } else {
+            false
+        }
+    }
+
+    /// One internal step to `t1` with events located inside it.
+    ///
+    /// Chatter guard: a guard that is violated from the very start of a
+    /// segment (no positive value inside it) fires at once, as a zero-length
+    /// event; this settles degenerate contacts, such as a block "slipping"
+    /// with exactly zero relative acceleration on an equal-friction stack. If
+    /// the same interface does it again within the step, its guard is muted
+    /// and switched at the step end; so are all guards after
+    /// `MAX_EVENTS_PER_STEP` events in one step.
+    pub(super) fn step_located(&mut self, t1: f64, exc: &Excitation, t_ref: f64) {
+        let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
+        let mut muted: u32 = 0;
+        let mut fired_at_once: u32 = 0;
+        let mut events = 0;
+        while self.t < t1 {
+            let t0 = self.t;
+            let h = t1 - t0;
+            let mut at_once: u32 = 0;
+            let (x1, earliest) = {
+                let seg = self.segment(exc, t_ref);
+                let (x0, x1) = (seg.start(), seg.structure_after(h));
+                let mut earliest: Option<(f64, usize)> = None;
+                let mut candidates = self.dynamics.changing_guards & !muted;
+                while candidates != 0 {
+                    let j = candidates.trailing_zeros() as usize;
+                    candidates &= candidates - 1;
+                    let g1 = seg.guard(j, &x1, h);
+                    if g1 >= 0.0 {
+                        continue;
+                    }
+                    let g0 = seg.guard(j, &x0, 0.0);
+                    let start = if g0 > 0.0 {
+                        Some((0.0, g0))
+                    } else {
+                        // The guard starts at zero (a contact that has just
+                        // switched): bracket from the first positive sample.
+                        (1..=6)
+                            .map(|k| 0.5f64.powi(k))
+                            .map(|th| (th, seg.guard_at(j, th, h)))
+                            .find(|&(_, g)| g > 0.0)
+                    };
+                    match start {
+                        Some(a) => {
+                            let th = seg.locate(j, h, [a, (1.0, g1)]);
+                            if earliest.is_none_or(|(e, _)| th < e) {
+                                earliest = Some((th, j));
+                            }
+                        }
+                        None if fired_at_once & (1 << j) == 0 => at_once |= 1 << j,
+                        None => muted |= 1 << j,
+                    }
+                }
+                (x1, earliest)
+            };
+            if at_once != 0 {
+                fired_at_once |= at_once;
+                self.fire_violated(exc, t_ref, 0, at_once);
+                continue;
+            }
+            match earliest {
+                None => {
+                    self.accept(&x1, h, exc, t_ref);
+                    self.t = t1;
+                }
+                Some((theta, located)) => {
+                    // The located guard fires whatever its sign after
+                    // rounding; others fire if they have reached zero too.
+                    let h_event = theta * h;
+                    let xe = self.segment(exc, t_ref).structure_after(h_event);
+                    self.accept(&xe, h_event, exc, t_ref);
+                    if theta >= 1.0 {
+                        self.t = t1;
+                    }
+                    self.fire_violated(exc, t_ref, all & !muted, 1 << located);
+                    events += 1;
+                    if events >= MAX_EVENTS_PER_STEP {
+                        muted = all;
+                    }
+                }
+            }
+        }
+        if muted != 0 {
+            self.stats.muted += u64::from(muted.count_ones());
+            self.fire_violated(exc, t_ref, muted, 0);
+        }
+    }
+
+    /// One internal step to `t1` switching modes only at its end (baseline).
+    pub(super) fn step_switch_at_end(&mut self, t1: f64, exc: &Excitation, t_ref: f64) {
+        let h = t1 - self.t;
+        let x1 = self.segment(exc, t_ref).structure_after(h);
+        self.accept(&x1, h, exc, t_ref);
+        self.t = t1;
+        let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
+        self.fire_violated(exc, t_ref, all, 0);
+    }
+}
