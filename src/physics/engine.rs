@@ -1,6 +1,8 @@
-//! Time integration: RK4 on the reduced system of the current mode, with
-//! stick/slip events located inside the step (or, as a baseline, checked at
-//! step ends only), running peaks and the energy balance.
+//! Time integration of the reduced system of the current mode: by default
+//! the exact map of each substep (RK4 folded to round-off) wherever a substep
+//! is proved free of switches and new peaks, and RK4 with stick/slip events
+//! located inside the step elsewhere (or, as a baseline, checked at step ends
+//! only); running peaks and the energy balance.
 //!
 //! The state is kept per body (`u`, `v` relative to the support); a step
 //! packs one displacement and one velocity per cluster plus the energy
