@@ -298,7 +298,7 @@ pub const CONSISTENCY_TOL: f64 = 1e-10;
 
 /// Largest stick force interface j holds before a guard fires: `mus N`
 /// with the consistency slack, so that a stick the resolver accepted
-/// starts with a guard >= 0 (see the README, "Events").
+/// starts with a guard >= 0 (docs/model-and-numerics.md, "Events").
 pub fn stick_capacity(sys: &System, j: usize) -> f64 {
     sys.mus[j] * sys.normal[j] * (1.0 + CONSISTENCY_TOL)
 }

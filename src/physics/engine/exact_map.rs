@@ -251,7 +251,7 @@ mod tests {
 
     #[test]
     fn the_map_is_the_exact_solution() {
-        // Expected values: the Nigam–Jennings recurrence (src/sdof.rs, exact
+        // Expected values: the Nigam–Jennings recurrence (src/physics/sdof.rs, exact
         // for a load linear over the step) on the bare structure.
         let p = Params::default();
         let sys = System::new(&p).unwrap();

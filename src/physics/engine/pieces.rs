@@ -101,7 +101,7 @@ pub const STABLE_H_OMEGA: f64 = 2.5;
 /// Default accuracy bounds: `h ω_p <= 0.02` and `h <= 1.25 ms`. Measured
 /// over periods 0.1–10 s on real, synthetic and spectrum-matched records, they
 /// keep peaks within 1e-6 relative of the exact solution and the energy
-/// residual below 1e-8 of the input (README, "Accuracy"). The absolute bound
+/// residual below 1e-8 of the input (docs/accuracy-speed.md, "Accuracy"). The absolute bound
 /// matters at long periods and for records rich in short periods (matched
 /// records): the structure's free response absorbs every change of slope of
 /// the forcing, and the per-step error then no longer falls with ω.
@@ -111,7 +111,7 @@ pub const ACCURATE_MAX_STEP: f64 = 0.00125;
 /// The default method's RK4 step inside the substeps the exact map cannot
 /// take (those holding an event or a new interior peak): `h ω_p <= 0.005`
 /// and `h <= 0.3125 ms`, a quarter of the former automatic step, so that
-/// these few substeps stay below 1e-9 of the peaks (README, "Accuracy").
+/// these few substeps stay below 1e-9 of the peaks (docs/accuracy-speed.md, "Accuracy").
 pub const FINE_H_OMEGA: f64 = 0.01;
 /// See [`FINE_H_OMEGA`].
 pub const FINE_MAX_STEP: f64 = 0.000625;
