@@ -1,0 +1,292 @@
+//! fmi2Get/fmi2Set of Real, Integer, Boolean and String variables: which
+//! value reference names which variable, whether it may be set in the
+//! current state, the checks of each value set, and where each value read
+//! comes from.
+
+use super::{Instance, Phase, Status};
+use crate::fmi::variables::{Causality, Id};
+use crate::limits::MAX_PATH_BYTES;
+use crate::physics::engine::Outputs;
+use crate::physics::params::{check_scalar, ParamError, MAX_BLOCKS};
+use crate::physics::solver::SolverKind;
+
+impl Instance {
+    pub(super) fn lookup(&mut self, func: &str, vr: u32) -> Result<Id, Status> {
+        Id::from_vr(vr).ok_or_else(|| self.error(func, format!("unknown value reference {vr}")))
+    }
+
+    /// The variable behind `vr`, if it exists and may be set now.
+    fn target(&mut self, func: &str, vr: u32) -> Result<Id, Status> {
+        let id = self.lookup(func, vr)?;
+        self.settable(func, id)?;
+        Ok(id)
+    }
+
+    /// Checks that variable `id` may be set now.
+    fn settable(&mut self, func: &str, id: Id) -> Result<(), Status> {
+        let phase = self.d.phase;
+        let ok = match id.causality() {
+            Causality::Parameter => {
+                matches!(phase, Phase::Instantiated | Phase::InitializationMode)
+            }
+            Causality::Input => matches!(
+                phase,
+                Phase::Instantiated | Phase::InitializationMode | Phase::StepComplete
+            ),
+            Causality::Output => {
+                return Err(self.error(
+                    func,
+                    format!("{} is an output and cannot be set", name_of(id)),
+                ));
+            }
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(self.error(
+                func,
+                format!("{} cannot be set in state {phase:?}", name_of(id)),
+            ))
+        }
+    }
+
+    pub(super) fn param_error(&mut self, func: &str, e: ParamError) -> Status {
+        self.error(func, e.to_string())
+    }
+
+    /// fmi2SetReal.
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        const F: &str = "fmi2SetReal";
+        for (&vr, &x) in vrs.iter().zip(values) {
+            let id = match self.target(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            if let Err(e) = check_scalar(&name_of(id), x) {
+                return self.param_error(F, e);
+            }
+            let v = &mut self.d.values;
+            match id {
+                Id::Mp => v.params.mp = x,
+                Id::Tp => v.params.tp = x,
+                Id::Zeta => v.params.zeta = x,
+                Id::G => v.params.g = x,
+                Id::RecordScale => v.record_scale = x,
+                Id::MaxStep => v.max_step = x,
+                Id::FrictionEps => v.friction_eps = x,
+                Id::Alpha(j) => v.params.alpha[j - 1] = x,
+                Id::Mus(j) => v.params.mus[j - 1] = x,
+                Id::Muk(j) => v.params.muk[j - 1] = x,
+                Id::Ag => self.d.ag = x,
+                Id::Fext => self.d.fext = x,
+                _ => return self.error(F, format!("{} is not a Real", name_of(id))),
+            }
+            // Outputs show the inputs set for the next step (a master may iterate).
+            self.outputs = None;
+            if id.causality() == Causality::Parameter {
+                self.d.sim = None;
+            }
+        }
+        Status::Ok
+    }
+
+    /// fmi2SetInteger.
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        const F: &str = "fmi2SetInteger";
+        for (&vr, &x) in vrs.iter().zip(values) {
+            let id = match self.target(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            match id {
+                Id::NBlocks if (0..=MAX_BLOCKS as i32).contains(&x) => {
+                    self.d.values.params.n_blocks = x as usize
+                }
+                Id::NBlocks => return self.error(F, format!("nBlocks = {x} is not allowed: it must be an integer from 0 to {MAX_BLOCKS}")),
+                Id::Solver if SolverKind::from_code(x).is_some() => self.d.values.solver = x,
+                Id::Solver => return self.error(F, format!("solver = {x} is not allowed: it must be 1 (event-located RK4), 2 (step-end switching) or 3 (tanh-regularized friction)")),
+                _ => return self.error(F, format!("{} is not an Integer", name_of(id))),
+            }
+            self.d.sim = None;
+        }
+        Status::Ok
+    }
+
+    /// fmi2SetBoolean (nothing is settable).
+    pub fn set_boolean(&mut self, vrs: &[u32], _values: &[i32]) -> Status {
+        const F: &str = "fmi2SetBoolean";
+        // The first reference decides: it is unknown, not settable now, or
+        // a Boolean output.
+        match vrs.first().map(|&vr| self.target(F, vr)) {
+            None => Status::Ok,
+            Some(Err(s)) => s,
+            Some(Ok(id)) => self.error(F, format!("{} is not a settable Boolean", name_of(id))),
+        }
+    }
+
+    /// fmi2SetString.
+    pub fn set_string(&mut self, vrs: &[u32], values: &[String]) -> Status {
+        const F: &str = "fmi2SetString";
+        for (&vr, x) in vrs.iter().zip(values) {
+            let id = match self.target(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            match id {
+                Id::RecordFile if x.len() > MAX_PATH_BYTES => {
+                    return self.error(
+                        F,
+                        format!(
+                            "recordFile of {} bytes is not allowed: it must be a path of at most {MAX_PATH_BYTES} bytes",
+                            x.len()
+                        ),
+                    )
+                }
+                Id::RecordFile => self.d.values.record_file = x.clone(),
+                _ => return self.error(F, format!("{} is not a String", name_of(id))),
+            }
+            self.d.sim = None;
+        }
+        Status::Ok
+    }
+
+    fn readable(&mut self, func: &str) -> Result<(), Status> {
+        self.require(
+            func,
+            &[
+                Phase::InitializationMode,
+                Phase::StepComplete,
+                Phase::Terminated,
+                Phase::Error,
+            ],
+        )
+    }
+
+    /// fmi2GetReal.
+    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Status {
+        const F: &str = "fmi2GetReal";
+        if let Err(s) = self.readable(F) {
+            return s;
+        }
+        for (&vr, slot) in vrs.iter().zip(out.iter_mut()) {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            let v = &self.d.values;
+            let p = &v.params;
+            let block = |j: usize, xs: &[f64; MAX_BLOCKS]| xs[j - 1];
+            *slot = match id {
+                Id::Mp => p.mp,
+                Id::Tp => p.tp,
+                Id::Zeta => p.zeta,
+                Id::G => p.g,
+                Id::RecordScale => v.record_scale,
+                Id::MaxStep => v.max_step,
+                Id::FrictionEps => v.friction_eps,
+                Id::Alpha(j) => block(j, &p.alpha),
+                Id::Mus(j) => block(j, &p.mus),
+                Id::Muk(j) => block(j, &p.muk),
+                Id::Ag => self.d.ag,
+                Id::Fext => self.d.fext,
+                Id::TSwitch => self.d.t_switch,
+                _ => {
+                    let o = match self.current_outputs(F) {
+                        Ok(o) => o,
+                        Err(s) => return s,
+                    };
+                    match real_output(o, id) {
+                        Some(x) => x,
+                        None => return self.error(F, format!("{} is not a Real", name_of(id))),
+                    }
+                }
+            };
+        }
+        Status::Ok
+    }
+
+    /// fmi2GetInteger.
+    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
+        const F: &str = "fmi2GetInteger";
+        if let Err(s) = self.readable(F) {
+            return s;
+        }
+        for (&vr, slot) in vrs.iter().zip(out.iter_mut()) {
+            *slot = match self.lookup(F, vr) {
+                Ok(Id::NBlocks) => self.d.values.params.n_blocks as i32,
+                Ok(Id::Solver) => self.d.values.solver,
+                Ok(Id::NEvents) => match self.current_outputs(F) {
+                    Ok(o) => o.n_events.min(i32::MAX as u64) as i32,
+                    Err(s) => return s,
+                },
+                Ok(Id::NAmbiguous) => match self.current_outputs(F) {
+                    Ok(o) => o.n_ambiguous.min(i32::MAX as u64) as i32,
+                    Err(s) => return s,
+                },
+                Ok(id) => return self.error(F, format!("{} is not an Integer", name_of(id))),
+                Err(s) => return s,
+            };
+        }
+        Status::Ok
+    }
+
+    /// fmi2GetBoolean.
+    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
+        const F: &str = "fmi2GetBoolean";
+        if let Err(s) = self.readable(F) {
+            return s;
+        }
+        for (&vr, slot) in vrs.iter().zip(out.iter_mut()) {
+            *slot = match self.lookup(F, vr) {
+                Ok(Id::Stuck(j)) => match self.current_outputs(F) {
+                    Ok(o) => i32::from(o.stuck[j - 1]),
+                    Err(s) => return s,
+                },
+                Ok(id) => return self.error(F, format!("{} is not a Boolean", name_of(id))),
+                Err(s) => return s,
+            };
+        }
+        Status::Ok
+    }
+
+    /// fmi2GetString.
+    pub fn get_string(&mut self, vrs: &[u32]) -> Result<Vec<String>, Status> {
+        const F: &str = "fmi2GetString";
+        self.readable(F)?;
+        vrs.iter()
+            .map(|&vr| match self.lookup(F, vr)? {
+                Id::RecordFile => Ok(self.d.values.record_file.clone()),
+                id => Err(self.error(F, format!("{} is not a String", name_of(id)))),
+            })
+            .collect()
+    }
+}
+
+pub(super) fn name_of(id: Id) -> String {
+    id.name()
+}
+
+/// The field of `o` behind a Real output computed by the simulator.
+pub(super) fn real_output(o: &Outputs, id: Id) -> Option<f64> {
+    let block = |j: usize, xs: &[f64; MAX_BLOCKS]| xs[j - 1];
+    Some(match id {
+        Id::Up => o.up,
+        Id::Vp => o.vp,
+        Id::ApAbs => o.ap_abs,
+        Id::BaseShear => o.base_shear,
+        Id::PeakUp => o.peak_up,
+        Id::PeakApAbs => o.peak_ap_abs,
+        Id::Einput => o.e_input,
+        Id::Ekinetic => o.e_kinetic,
+        Id::Estrain => o.e_strain,
+        Id::Eviscous => o.e_viscous,
+        Id::Efriction => o.e_friction,
+        Id::Ub(j) => block(j, &o.ub),
+        Id::Vb(j) => block(j, &o.vb),
+        Id::Slip(j) => block(j, &o.slip),
+        Id::AbAbs(j) => block(j, &o.ab_abs),
+        Id::F(j) => block(j, &o.force),
+        Id::PeakSlip(j) => block(j, &o.peak_slip),
+        _ => return None,
+    })
+}
