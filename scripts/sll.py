@@ -267,9 +267,10 @@ class Model:
         rows = []
         for p, o in zip(table, out):
             n = int(p[0])
-            row = {"peakUp": o[0], "peakApAbs": o[1], "Einput": o[2], "nEvents": int(o[3]),
-                   "nAmbiguous": int(o[4])}
-            row.update({f"peakSlip[{j}]": o[4 + j] for j in range(1, n + 1)})
+            # Plain floats, as Model.run gives (numpy's repr would reach CSV files).
+            row = {"peakUp": float(o[0]), "peakApAbs": float(o[1]), "Einput": float(o[2]),
+                   "nEvents": int(o[3]), "nAmbiguous": int(o[4])}
+            row.update({f"peakSlip[{j}]": float(o[4 + j]) for j in range(1, n + 1)})
             rows.append(row)
         return rows
 
