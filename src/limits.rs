@@ -5,6 +5,24 @@
 
 use crate::physics::engine::Outputs;
 use crate::physics::params::MAX_BLOCKS;
+use std::fmt;
+
+/// A number in a message: the shortest digits that read back the same, in
+/// exponent form where plain decimals would run long (`1e300` would take
+/// 301 characters, `5e-324` 326).
+#[derive(Clone, Copy, Debug)]
+pub struct Num(pub f64);
+
+impl fmt::Display for Num {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let a = self.0.abs();
+        if a.is_finite() && a != 0.0 && !(1e-6..1e9).contains(&a) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
 
 /// Largest record file read (bytes): 10 million CSV samples fit with room.
 pub const MAX_RECORD_BYTES: u64 = 512 << 20;
@@ -20,6 +38,9 @@ pub const MAX_RECORD_TIME: f64 = 1e6;
 /// Largest absolute acceleration in a record (m/s^2, after the AT2
 /// conversion from g): 100 000 g.
 pub const MAX_RECORD_ACCEL: f64 = 1e6;
+/// Largest absolute start and stop time (s): about 31 years, where a double
+/// still resolves 0.1 µs (at 1e16 s, `t + 1` would round back to `t`).
+pub const MAX_TIME: f64 = 1e9;
 /// Longest `recordFile` string (bytes), as the usual `PATH_MAX`.
 pub const MAX_PATH_BYTES: usize = 4096;
 /// Most characters of a file's content a message quotes.
@@ -64,10 +85,11 @@ pub fn work_error(length: f64, h_max: f64, samples: usize, weight: f64) -> Optio
             format!(", each counted as {weight} for its solver's cost")
         };
         format!(
-            "stepping {length} s would take about {steps:.3e} internal steps \
+            "stepping {} s would take about {steps:.3e} internal steps \
              (internal step {h_max:.3e} s, {samples} record samples{counted}), more than \
              the limit of {MAX_STEPS_PER_CALL:e} per call: split it into shorter \
-             communication steps, or raise maxStep"
+             communication steps, or raise maxStep",
+            Num(length)
         )
     })
 }
@@ -113,9 +135,10 @@ pub fn first_non_finite(o: &Outputs) -> Option<(String, f64)> {
 pub fn non_finite_message(o: &Outputs, start_time: f64) -> Option<String> {
     first_non_finite(o).map(|(name, x)| {
         format!(
-            "{name} = {x} at t = {} s: the state or an output left the finite numbers \
+            "{name} = {} at t = {} s: the state or an output left the finite numbers \
              (inputs or parameters too large for this scene)",
-            start_time + o.t
+            Num(x),
+            Num(start_time + o.t)
         )
     })
 }

@@ -247,8 +247,18 @@ impl Instance {
         if let Err(s) = self.require(F, &[Phase::Instantiated]) {
             return s;
         }
-        if !start.is_finite() || stop.is_some_and(|s| !(s.is_finite() && s >= start)) {
-            return self.error(F, format!("startTime = {start}, stopTime = {stop:?}: need finite times with stopTime >= startTime"));
+        let in_range = |t: f64| t.abs() <= limits::MAX_TIME;
+        if !in_range(start) || stop.is_some_and(|s| !(in_range(s) && s >= start)) {
+            let stop = stop.map_or("none".to_string(), |s| limits::Num(s).to_string());
+            return self.error(
+                F,
+                format!(
+                    "startTime = {}, stopTime = {stop}: times must be finite, within \
+                     -{max} .. {max} s, with stopTime >= startTime",
+                    limits::Num(start),
+                    max = limits::Num(limits::MAX_TIME),
+                ),
+            );
         }
         self.d.start_time = start;
         self.d.time = start;

@@ -281,10 +281,14 @@ impl Simulator {
     /// external force (it can break a stick; `ag` cannot).
     fn begin_piece(&mut self, t_end: f64, exc: &Excitation) -> Result<Piece, SimError> {
         exc.check(self.t, t_end)?;
-        if exc.fext != self.fext_now {
+        // A ramp of Fext carried from piece to piece differs from where the
+        // last piece ended only by rounding: that is no jump to resolve.
+        let rounding = 1e-12 * exc.fext.abs().max(self.fext_now.abs());
+        if (exc.fext - self.fext_now).abs() > rounding {
             self.fext_now = exc.fext;
             self.resolve_mode(0);
         }
+        self.fext_now = exc.fext;
         let h = if self.exact {
             self.map_step()
         } else {

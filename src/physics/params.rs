@@ -69,7 +69,9 @@ impl fmt::Display for ParamError {
         write!(
             f,
             "{} = {} is not allowed: it must be {}",
-            self.field, self.value, self.allowed
+            self.field,
+            crate::limits::Num(self.value),
+            self.allowed
         )
     }
 }

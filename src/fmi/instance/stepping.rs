@@ -8,7 +8,7 @@ use super::{Instance, Phase, Status};
 use crate::fmi::ports;
 use crate::fmi::variables::{Causality, Id};
 use crate::ground::record;
-use crate::limits;
+use crate::limits::{self, Num};
 use crate::physics::engine::{Excitation, Outputs};
 use crate::physics::params::check_scalar;
 use crate::physics::solver::{Solver, Stepper};
@@ -163,20 +163,42 @@ impl Instance {
         if !t.is_finite() || (t - now).abs() > 1e-9 * now.abs().max(1.0) {
             return self.error(
                 F,
-                format!("currentCommunicationPoint = {t} does not match the FMU's time {now}"),
+                format!(
+                    "currentCommunicationPoint = {} does not match the FMU's time {}",
+                    Num(t),
+                    Num(now)
+                ),
             );
         }
         if !(h >= 0.0 && h.is_finite()) {
             return self.error(
                 F,
-                format!("communicationStepSize = {h} is not allowed: it must be finite and >= 0"),
+                format!(
+                    "communicationStepSize = {} is not allowed: it must be finite and >= 0",
+                    Num(h)
+                ),
+            );
+        }
+        if h > 0.0 && t + h == t {
+            return self.error(
+                F,
+                format!(
+                    "communicationStepSize = {} is below the resolution of time at t = {} s: \
+                     it would not advance",
+                    Num(h),
+                    Num(t)
+                ),
             );
         }
         if let Some(stop) = self.d.stop_time {
             if t + h > stop + 1e-9 * stop.abs().max(1.0) {
                 return self.error(
                     F,
-                    format!("stepping to {} would pass stopTime = {stop}", t + h),
+                    format!(
+                        "stepping to {} would pass stopTime = {}",
+                        Num(t + h),
+                        Num(stop)
+                    ),
                 );
             }
         }

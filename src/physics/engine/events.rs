@@ -143,10 +143,14 @@ impl Simulator {
         let res = mode::resolve(&self.sys, &req);
         if !res.consistent {
             self.stats.inconsistent += 1;
-        } else if req.zero != 0 && mode::consistent_count(&self.sys, &req) > 1 {
-            self.stats.ambiguous += 1;
         }
         if res.mode != self.mode {
+            // Counted at switches only: the count tries all 3^k assignments,
+            // too costly for the resolutions that keep the mode (a stuck
+            // stack under a moving force re-resolves at every jump).
+            if res.consistent && req.zero != 0 && mode::consistent_count(&self.sys, &req) > 1 {
+                self.stats.ambiguous += 1;
+            }
             self.stats.events += 1;
             self.last_event = self.t;
             if self.first_switch.is_nan() && self.t >= self.watch_from {

@@ -1,6 +1,7 @@
 //! What the engine reports: its outputs, counters and errors.
 
 use super::*;
+use crate::limits::Num;
 
 /// An error while advancing.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,13 +32,21 @@ impl std::fmt::Display for SimError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             SimError::BadInput { name, value } => {
-                write!(f, "{name} = {value} is not allowed: it must be finite")
+                write!(
+                    f,
+                    "{name} = {} is not allowed: it must be finite",
+                    Num(*value)
+                )
             }
             SimError::BadTime { now, t_end } => write!(
                 f,
-                "cannot step to t = {t_end} s: the simulation is already at t = {now} s"
+                "cannot step to t = {} s: the simulation is already at t = {} s",
+                Num(*t_end),
+                Num(*now)
             ),
-            SimError::NonFinite { t } => write!(f, "the state became non-finite at t = {t} s"),
+            SimError::NonFinite { t } => {
+                write!(f, "the state became non-finite at t = {} s", Num(*t))
+            }
         }
     }
 }
