@@ -41,8 +41,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import opensees_block  # noqa: E402
-from sll import ROOT, Model, read_record  # noqa: E402
+from sll import ROOT, Model, opensees_block, read_record  # noqa: E402
 
 G = 9.81
 REAL_RECORD = ROOT.parent / "shared" / "ground_motions" / "RSN6_IMPVALL.I_I-ELC180.AT2"

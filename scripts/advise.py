@@ -48,9 +48,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import seismic  # noqa: E402
 import study  # noqa: E402
-import study_tasks  # noqa: E402
+from sll import seismic, study_tasks  # noqa: E402
 
 FLOOR = 1e-6  # relative differences below the engine's accuracy target count as equal
 SIMPLER = ("bare", "rigid", "single")

@@ -3,7 +3,7 @@
     python scripts/couple.py --out out/coupling [--quick]
 
 Two buildings under a seeded broadband record (10 s at 5 ms, PGA 3 m/s2;
---quick: 4 s and fewer steps), one FMU instance per storey (coupling.py):
+--quick: 4 s and fewer steps), one FMU instance per storey (sll/coupling.py):
 - linear: storey 1 (Tp 0.4 s, 1000 kg) under storey 2 (Tp 0.3 s, 800 kg,
   carrying two blocks that cannot slip, mu 20), against the exact shear
   building; every master (Jacobi, Gauss-Seidel) with every extrapolation
@@ -31,7 +31,7 @@ from matplotlib.ticker import NullFormatter  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from coupling import (EXTRAPOLATIONS, MASTERS, Building, broadband_record, drift_error,  # noqa: E402
+from sll.coupling import (EXTRAPOLATIONS, MASTERS, Building, broadband_record, drift_error,  # noqa: E402
                       exact_building, observed_order)
 
 LOWER = {"nBlocks": 0, "Tp": 0.4, "mp": 1000.0}

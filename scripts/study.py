@@ -57,9 +57,8 @@ import numpy as np
 SCRIPTS = Path(__file__).resolve().parent
 sys.path.insert(0, str(SCRIPTS))
 import ground_motions  # noqa: E402
-import seismic  # noqa: E402
 import sll  # noqa: E402
-import study_tasks  # noqa: E402
+from sll import seismic, study_tasks  # noqa: E402
 
 ROOT = SCRIPTS.parent
 GRID = {
@@ -143,7 +142,7 @@ def run_dask(tasks: list[dict], address: str, progress: Progress) -> list[list[d
     import cloudpickle
     from distributed import Client, as_completed as dask_completed
 
-    # The task code travels by value; it finds sll.py through task["scripts"].
+    # The task code travels by value; it finds the sll package through task["scripts"].
     cloudpickle.register_pickle_by_value(study_tasks)
     with Client(address) as client:
         futures = client.map(study_tasks.run_task, tasks, pure=False)

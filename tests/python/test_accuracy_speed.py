@@ -17,8 +17,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts"))
 import accuracy_speed  # noqa: E402
-import opensees_block  # noqa: E402
 import sll  # noqa: E402
+from sll import opensees_block  # noqa: E402
 import stability  # noqa: E402
 
 SINGLE = accuracy_speed.SCENES["single"]

@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT / "scripts"))
 import advise  # noqa: E402
 import sll  # noqa: E402
 import study  # noqa: E402
-import study_tasks  # noqa: E402
+from sll import study_tasks  # noqa: E402
 
 G = 9.81
 

@@ -18,8 +18,8 @@ from scipy.integrate import solve_ivp
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts"))
-import coupling  # noqa: E402
-from coupling import Building, broadband_record, drift_error, exact_building, observed_order  # noqa: E402
+from sll import coupling  # noqa: E402
+from sll.coupling import Building, broadband_record, drift_error, exact_building, observed_order  # noqa: E402
 
 # The extrapolation of the event-aware test: from the FMU's output derivatives.
 EXTRAPOLATION = "derivative"
@@ -129,7 +129,7 @@ def test_fmucontainer_building_equals_the_python_master(building, tmp_path, sequ
     # inputs, outputs read right after the step; Jacobi for the container's
     # parallel mode, Gauss-Seidel bottom up for its sequential mode) computes
     # the same FMU calls, so the drifts agree to rounding.
-    from building_container import build_container
+    from sll.building_container import build_container
 
     rec = broadband_record(51, duration=3.0)
     storeys = random_storeys(52, 3, blocks_on=1)

@@ -13,8 +13,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts"))
-import seismic  # noqa: E402
 import sll  # noqa: E402
+from sll import seismic  # noqa: E402
 
 RECORDS = ROOT.parent / "shared" / "ground_motions"
 FILES = sorted(p for p in RECORDS.iterdir() if p.suffix.lower() == ".at2")

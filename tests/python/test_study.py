@@ -20,11 +20,10 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts"))
 import advise  # noqa: E402
-import seismic  # noqa: E402
 import sll  # noqa: E402
 import study  # noqa: E402
-import study_tasks  # noqa: E402
 import validate  # noqa: E402
+from sll import seismic, study_tasks  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,7 @@
 """Couples instances of the FMU as a shear building, one instance per storey,
 and solves the same building exactly when it is linear (docs/coupling.md).
 
-    from coupling import Building, exact_building
+    from sll.coupling import Building, exact_building
     storeys = [{"nBlocks": 0, "Tp": 0.4},                  # FMU parameters, bottom up
                {"nBlocks": 1, "Tp": 0.3, "mus[1]": 9, "muk[1]": 9}]
     with Building(2) as b:
@@ -40,7 +40,6 @@ so the next extrapolation starts from the values after the switch.
 from __future__ import annotations
 
 import math
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -48,8 +47,7 @@ from pathlib import Path
 import numpy as np
 from scipy.linalg import expm
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from sll import Model, read_record  # noqa: E402
+from sll import Model, read_record
 
 MASTERS = ("jacobi", "gauss-seidel")
 EXTRAPOLATIONS = ("hold", "history", "derivative")

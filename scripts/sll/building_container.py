@@ -1,7 +1,7 @@
-"""The shear building of coupling.py as one FMU, assembled by fmucontainer
+"""The shear building of sll/coupling.py as one FMU, assembled by fmucontainer
 (PyPI fmu-manipulation-toolbox) from copies of this FMU, one per storey.
 
-    from building_container import build_container
+    from sll.building_container import build_container
     fmu = build_container(storeys, (t, ag), H=0.005, out_dir=DIR, sequential=False)
     fmpy.simulate_fmu(fmu, stop_time=t[-1], output_interval=0.005, output=["up1", "up2"])
 
@@ -25,9 +25,8 @@ from pathlib import Path
 
 from fmpy import read_model_description
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from coupling import write_record_csv  # noqa: E402
-from sll import fmu_path  # noqa: E402
+from sll import fmu_path
+from sll.coupling import write_record_csv
 
 GROUND = "ground.csv"
 

@@ -1,5 +1,9 @@
-"""Shared helpers for the scripts and tests: build or find the FMU, load it
-once with fmpy, and run a record through it.
+"""The library the command scripts and the tests share (scripts/sll/). This
+module: build or find the FMU, load it once with fmpy, run a record through
+it, read records. Beside it: seismic (spectra), coupling (FMUs coupled as a
+shear building), building_container (the same as one fmucontainer FMU),
+study_tasks (the study's unit of work, shipped to Dask workers) and
+opensees_block (the OpenSees reference).
 
     from sll import Model
     with Model() as m:
@@ -23,7 +27,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 from fmpy.logging import addLoggerProxy
 from ctypes import POINTER, byref, c_char_p, c_double, c_int, c_size_t, create_string_buffer
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 FMU_PATH = ROOT / "target" / "fmu" / "StackedLiveLoad.fmu"
 DEFAULT_RECORD = "default_record.csv"  # in the FMU's resources folder
 MAX_BLOCKS = 8

@@ -67,7 +67,7 @@ def run_task(task: dict) -> list[dict]:
     Every run of the task goes to the library in one call (`Model.run_batch`)."""
     scripts = task.get("scripts")
     if scripts and scripts not in sys.path:
-        sys.path.insert(0, scripts)  # a Dask worker: find sll.py
+        sys.path.insert(0, scripts)  # a Dask worker: find the sll package
     zone, record, tp, fmu = task["zone"], task["record"], task["Tp"], task.get("fmu")
     name = record.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     key = {"zone": zone, "record": name, "Tp": tp}
