@@ -92,6 +92,17 @@ def write_record_csv(t: np.ndarray, ag: np.ndarray, path: Path) -> Path:
 
 # -------------------------------------------------------- exact reference
 
+def check_storeys(storeys: list[dict]) -> None:
+    """The building's record is the ground motion of every storey: a storey's
+    own recordFile or recordScale would drive it differently from the exact
+    reference, so they are refused (scale the record instead)."""
+    for i, p in enumerate(storeys, 1):
+        own = sorted({"recordFile", "recordScale"} & set(p))
+        if own:
+            raise ValueError(f"storey {i}: {', '.join(own)} cannot be set per storey: the "
+                             "building's record drives the ground (scale the record itself)")
+
+
 def storey_constants(params: dict, defaults: dict) -> dict:
     """Mass (structure plus every block, rigidly attached), stiffness and
     damping of one storey, from its FMU parameters and the FMU's defaults."""
@@ -138,6 +149,7 @@ def exact_building(storeys: list[dict], record, times, defaults: dict | None = N
     if defaults is None:
         with Model() as probe:
             defaults = fmu_defaults(probe)
+    check_storeys(storeys)
     t_rec, a_rec = load_record(record)
     times = np.asarray(times, float)
     consts = [storey_constants(p, defaults) for p in storeys]
@@ -270,6 +282,7 @@ class Building:
             raise ValueError(f"extrapolation = {extrapolation!r}: it must be one of {EXTRAPOLATIONS}")
         if not 1 <= len(storeys) <= len(self.models):
             raise ValueError(f"{len(storeys)} storeys: this Building holds 1..{len(self.models)}")
+        check_storeys(storeys)
         t_rec, a_rec = load_record(record)
         stop = float(t_rec[-1] if stop is None else stop)
         if not (math.isfinite(H) and 0 < H <= stop):

@@ -7,7 +7,7 @@
 
 use super::record::{GroundMotion, RecordError};
 use crate::limits::{
-    quote, MAX_RECORD_ACCEL, MAX_RECORD_BYTES, MAX_RECORD_LINE, MAX_RECORD_SAMPLES,
+    quote, Num, MAX_RECORD_ACCEL, MAX_RECORD_BYTES, MAX_RECORD_LINE, MAX_RECORD_SAMPLES,
     MAX_RECORD_TIME, MIN_RECORD_DT,
 };
 use std::fs::File;
@@ -43,7 +43,7 @@ impl GroundMotion {
         factor: f64,
     ) -> Result<GroundMotion, RecordError> {
         if !(dt > 0.0 && dt.is_finite()) {
-            return Err(err(name, 0, format!("dt = {dt} must be positive")));
+            return Err(err(name, 0, format!("dt = {} must be positive", Num(dt))));
         }
         let mut values = Vec::new();
         for line in text_lines(text, name) {
@@ -181,7 +181,11 @@ impl<R: BufRead> Iterator for BoundedLines<'_, R> {
         } else {
             self.done = true; // the last line, without an end of line
         }
-        let line = String::from_utf8_lossy(&buf).replace('\r', " ");
+        let mut line = String::from_utf8_lossy(&buf).replace('\r', " ");
+        if self.no == 1 {
+            // A UTF-8 byte-order mark (spreadsheets write one) is no content.
+            line = line.trim_start_matches('\u{feff}').to_string();
+        }
         Some(Ok((self.no, line)))
     }
 }
@@ -263,19 +267,23 @@ fn npts_dt(line: &str) -> Option<(f64, f64)> {
 /// separator) before anything is allocated.
 fn check_header(n: f64, dt: f64, size: u64, file: &str) -> Result<usize, RecordError> {
     let e = |m: String| Err(err(file, 4, m));
-    if !(n >= 1.0 && n.fract() == 0.0 && n <= MAX_RECORD_SAMPLES as f64) {
+    // At least two samples, as a CSV record: one sample is no motion.
+    if !(n >= 2.0 && n.fract() == 0.0 && n <= MAX_RECORD_SAMPLES as f64) {
         return e(format!(
-            "NPTS = {n} is not allowed: it must be an integer from 1 to {MAX_RECORD_SAMPLES}"
+            "NPTS = {} is not allowed: it must be an integer from 2 to {MAX_RECORD_SAMPLES}",
+            Num(n)
         ));
     }
     if !(dt >= MIN_RECORD_DT && dt * (n - 1.0) <= MAX_RECORD_TIME) {
         return e(format!(
-            "DT = {dt} is not allowed: it must be at least {MIN_RECORD_DT:e} s, with NPTS DT at most {MAX_RECORD_TIME:e} s"
+            "DT = {} is not allowed: it must be at least {MIN_RECORD_DT:e} s, with NPTS DT at most {MAX_RECORD_TIME:e} s",
+            Num(dt)
         ));
     }
     if n > (size as f64 + 1.0) / 2.0 {
         return e(format!(
-            "NPTS = {n} but the file has only {size} bytes: it cannot hold that many values"
+            "NPTS = {} but the file has only {size} bytes: it cannot hold that many values",
+            Num(n)
         ));
     }
     Ok(n as usize)
@@ -379,8 +387,9 @@ fn parse_csv(
                     file,
                     no,
                     format!(
-                        "time {} does not increase by at least {MIN_RECORD_DT:e} s (previous {last})",
-                        row[0]
+                        "time {} does not increase by at least {MIN_RECORD_DT:e} s (previous {})",
+                        Num(row[0]),
+                        Num(last)
                     ),
                 ));
             }

@@ -112,6 +112,12 @@ def test_bad_master_settings_are_refused(building):
         building.couple(random_storeys(42, 2), rec, 0.01, extrapolation="cubic")
     with pytest.raises(ValueError, match="H = "):
         building.couple(random_storeys(42, 2), rec, -0.01)
+    # A storey's own record scale would drive it unlike the exact reference.
+    scaled = [{**random_storeys(42, 2)[0], "recordScale": 2.0}, random_storeys(42, 2)[1]]
+    with pytest.raises(ValueError, match="storey 1: recordScale"):
+        building.couple(scaled, rec, 0.01)
+    with pytest.raises(ValueError, match="storey 1: recordScale"):
+        exact_building(scaled, rec, np.arange(0.0, 1.0, 0.01), building.defaults)
 
 
 def test_a_step_that_does_not_divide_the_record_ends_shorter(building):
