@@ -452,7 +452,7 @@ def main(argv=None):
     ap.add_argument("--mu", type=float, nargs="+", required=True, help="static friction of each interface")
     ap.add_argument("--muk", type=float, nargs="+", help="kinetic friction (default: = mu)")
     src = ap.add_mutually_exclusive_group()
-    src.add_argument("--zone", choices=["III", "V"], default="V")
+    src.add_argument("--zone", choices=["III", "V"], help="the paper's suite (default V)")
     src.add_argument("--records", type=Path, help="a folder of .AT2 / .csv records")
     ap.add_argument("--level", choices=list(seismic.LEVELS),
                     help="with --zone: DBE (the suite as matched, default) or MCE (records x 2)")
@@ -493,6 +493,10 @@ def main(argv=None):
         if not ok:
             ap.error(message)
     level = args.level or "DBE"
+    if args.records is None and args.zone is None:
+        args.zone = "V"
+    if args.records is not None and not args.records.is_dir():
+        ap.error(f"--records {args.records}: no such folder")
     if args.records:
         records = sorted(p for p in args.records.iterdir() if p.suffix.lower() in (".at2", ".csv"))
         if not records:
