@@ -2,32 +2,13 @@
 //! the C program and the fmpy suite exercise the ABI itself).
 
 mod common;
-use stacked_live_load::fmi::instance::{Instance, LogSink, Phase, Status};
+use common::Capture;
+use stacked_live_load::fmi::instance::{Instance, Phase, Status};
 use stacked_live_load::fmi::variables::Id;
 use stacked_live_load::{ground::record, GroundMotion, Params, Settings, Simulator};
-use std::sync::{Arc, Mutex};
-
-#[derive(Clone, Default)]
-struct Capture(Arc<Mutex<Vec<String>>>);
-
-impl LogSink for Capture {
-    fn log(&self, _status: Status, _category: &str, message: &str) {
-        self.0.lock().unwrap().push(message.to_string());
-    }
-}
-
-impl Capture {
-    fn last(&self) -> String {
-        self.0.lock().unwrap().last().cloned().unwrap_or_default()
-    }
-}
 
 fn instance() -> (Instance, Capture) {
-    let log = Capture::default();
-    (
-        Instance::new("test", None, Box::new(log.clone()), false),
-        log,
-    )
+    common::instance("test")
 }
 
 fn initialized_with_log(setup: impl FnOnce(&mut Instance)) -> (Instance, Capture) {

@@ -10,37 +10,18 @@
 //! runs a longer one (`SLL_FUZZ_SEED` picks another seed).
 
 mod common;
+use common::Capture;
 use common::Rng;
-use stacked_live_load::fmi::instance::{Instance, LogSink, Phase, Status};
+use stacked_live_load::fmi::instance::{Instance, Phase, Status};
 use stacked_live_load::fmi::variables::{self, Causality, Id, Kind};
 use stacked_live_load::limits;
 use stacked_live_load::GroundMotion;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-#[derive(Clone, Default)]
-struct Capture(Arc<Mutex<Vec<String>>>);
-
-impl LogSink for Capture {
-    fn log(&self, _status: Status, _category: &str, message: &str) {
-        self.0.lock().unwrap().push(message.to_string());
-    }
-}
-
-impl Capture {
-    fn last(&self) -> String {
-        self.0.lock().unwrap().last().cloned().unwrap_or_default()
-    }
-}
-
 fn instance() -> (Instance, Capture) {
-    let log = Capture::default();
-    (
-        Instance::new("hostile", None, Box::new(log.clone()), false),
-        log,
-    )
+    common::instance("hostile")
 }
 
 fn set(inst: &mut Instance, id: Id, x: f64) -> Status {

@@ -11,11 +11,13 @@
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, DVector};
+use stacked_live_load::fmi::instance::{Instance, LogSink, Status};
 use stacked_live_load::physics::mode::{self, Contact, Mode, ResolveRequest};
 use stacked_live_load::physics::system::System;
 use stacked_live_load::{GroundMotion, Params};
 use std::f64::consts::PI;
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 /// `../shared/ground_motions/NAME` beside the repository.
 pub fn shared_record(name: &str) -> PathBuf {
@@ -472,4 +474,27 @@ pub fn run_sampled(
         .unwrap();
         each(sim);
     }
+}
+
+/// An FMU instance's log, kept for the tests to read.
+#[derive(Clone, Default)]
+pub struct Capture(Arc<Mutex<Vec<String>>>);
+
+impl LogSink for Capture {
+    fn log(&self, _status: Status, _category: &str, message: &str) {
+        self.0.lock().unwrap().push(message.to_string());
+    }
+}
+
+impl Capture {
+    /// The last message logged (empty if none).
+    pub fn last(&self) -> String {
+        self.0.lock().unwrap().last().cloned().unwrap_or_default()
+    }
+}
+
+/// A new FMU instance named `name` whose log the test can read.
+pub fn instance(name: &str) -> (Instance, Capture) {
+    let log = Capture::default();
+    (Instance::new(name, None, Box::new(log.clone()), false), log)
 }
