@@ -158,7 +158,7 @@ mod tests {
         let mut out = vec![0.0; 3 * BATCH_OUTPUTS];
         let path = CString::new(file.to_str().unwrap()).unwrap();
         let mut msg = [0 as c_char; 200];
-        let status = unsafe {
+        let run = |sets: &[f64], out: &mut [f64], msg: &mut [c_char; 200]| unsafe {
             sllRunBatch(
                 path.as_ptr(),
                 9.81,
@@ -170,6 +170,7 @@ mod tests {
                 200,
             )
         };
+        let status = run(&sets, &mut out, &mut msg);
         assert_eq!(status, 0);
         for (k, p) in sets.chunks(BATCH_PARAMS).enumerate() {
             let mut want = vec![0.0; BATCH_OUTPUTS];
@@ -179,18 +180,7 @@ mod tests {
         assert!(out[BATCH_OUTPUTS + 3] > 0.0, "the 2-block set switches");
         // A bad set is named with its variable.
         sets[BATCH_PARAMS + 2] = -1.0;
-        let status = unsafe {
-            sllRunBatch(
-                path.as_ptr(),
-                9.81,
-                1.0,
-                3,
-                sets.as_ptr(),
-                out.as_mut_ptr(),
-                msg.as_mut_ptr(),
-                200,
-            )
-        };
+        let status = run(&sets, &mut out, &mut msg);
         let text = unsafe { CStr::from_ptr(msg.as_ptr()) }.to_string_lossy();
         assert_eq!(status, 3);
         assert!(text.starts_with("sllRunBatch: set 1: Tp = -1"), "{text}");
