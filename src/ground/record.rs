@@ -5,7 +5,7 @@
 //! A record is a table of samples; between samples the acceleration is
 //! linear, before the first and after the last it is zero.
 
-use crate::physics::engine::{Excitation, SimError};
+use crate::physics::engine::{Excitation, Samples, SimError};
 use crate::physics::solver::Stepper;
 use std::fmt;
 
@@ -114,6 +114,9 @@ pub fn advance_with_record<S: Stepper>(
     scale: f64,
     extra: &Excitation,
 ) -> Result<(), SimError> {
+    if sim.takes_samples(extra) && t_end > sim.time() && record.time.len() >= 2 {
+        return advance_by_samples(sim, t_end, record, scale, extra);
+    }
     let t_start = sim.time();
     let mut t = t_start;
     let mut done = false;
@@ -140,6 +143,48 @@ pub fn advance_with_record<S: Stepper>(
         Some((t1, exc))
     });
     sim.advance_pieces(pieces)
+}
+
+/// As [`advance_with_record`] for a stepper with a path of its own for
+/// whole samples (held inputs): the samples from one at the current time to
+/// the last before `t_end` go to it in one call, the partial intervals at
+/// either end as pieces.
+fn advance_by_samples<S: Stepper>(
+    sim: &mut S,
+    t_end: f64,
+    record: &GroundMotion,
+    scale: f64,
+    extra: &Excitation,
+) -> Result<(), SimError> {
+    let n = record.time.len();
+    let dt = record.time[1] - record.time[0];
+    loop {
+        let t = sim.time();
+        if t >= t_end {
+            return Ok(());
+        }
+        let i = record.first_after(t);
+        if i >= 1 && i < n && record.time[i - 1] == t && record.time[i] <= t_end {
+            let last = record.time.partition_point(|&x| x <= t_end) - 1;
+            sim.advance_samples(&Samples {
+                time: &record.time[i - 1..=last],
+                accel: &record.accel[i - 1..=last],
+                scale,
+                ag_offset: extra.ag,
+                fext: extra.fext,
+                dt,
+            })?;
+            continue;
+        }
+        let (a, slope, piece_end) = record.piece_before(i, t);
+        let exc = Excitation {
+            ag: scale * a + extra.ag,
+            ag_rate: scale * slope,
+            fext: extra.fext,
+            fext_rate: 0.0,
+        };
+        sim.advance_pieces(std::iter::once((piece_end.min(t_end), exc)))?;
+    }
 }
 
 /// Runs a whole record from the simulator's current time to the record's end.

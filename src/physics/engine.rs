@@ -11,7 +11,8 @@
 //!
 //! This file holds the [`Simulator`] and its stepping loop; beside it:
 //! `pieces` (excitation pieces, step sizes), `exact_map` and `folded` (the
-//! default: substeps on the exact map, proved event- and peak-free), `lean`
+//! default: substeps on the exact map, proved event- and peak-free), `samples`
+//! (the same over a record's samples read directly), `lean`
 //! and `rk4_map` (the RK4 fast path of switch-free steps), `structure_rk4`
 //! (one RK4 step of the clusters), `events` (guards, location, resolution),
 //! `report` (outputs, counters, errors), `saved_state` and `state_check`
@@ -30,6 +31,7 @@ mod lean;
 mod pieces;
 mod report;
 mod rk4_map;
+mod samples;
 mod saved_state;
 mod state_check;
 mod structure_rk4;
@@ -41,6 +43,7 @@ pub use pieces::{
     FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP, STABLE_H_OMEGA,
 };
 pub use report::{Outputs, SimError, Stats};
+pub use samples::Samples;
 use structure_rk4::{move_bodies, upper_cluster_step, Structure, StructureRk4};
 
 /// The simulator: one scene, its state, peaks and energy terms.
@@ -266,6 +269,11 @@ impl Simulator {
             }
             self.end_piece(&piece);
         }
+        self.check_finite()
+    }
+
+    /// An error if any displacement or velocity is not finite.
+    fn check_finite(&self) -> Result<(), SimError> {
         let n = self.sys.n;
         if !(self.u[..=n]
             .iter()

@@ -133,7 +133,7 @@ impl Stepping {
 /// False when a new peak inside the substep cannot be excluded (the caller
 /// then takes the substep on the general path).
 #[inline(always)]
-fn raise_peak_proved(
+pub(super) fn raise_peak_proved(
     peak: &mut f64,
     [y0, d0, y1, d1]: [f64; 4],
     h: f64,
@@ -243,7 +243,7 @@ fn structure_peaks_proved(
 /// `r0 + r1 > h`. This admits a guard that starts at zero and grows (a
 /// contact that has just switched), which the interpolation bound cannot.
 #[inline(never)]
-fn stays_positive([g0, d0, g1, d1]: [f64; 4], h: f64, m2: f64) -> bool {
+pub(super) fn stays_positive([g0, d0, g1, d1]: [f64; 4], h: f64, m2: f64) -> bool {
     // Length over which `g + d τ - m2 τ²/2` stays positive from τ = 0+.
     let reach = |g: f64, d: f64| -> f64 {
         if g < 0.0 || (g == 0.0 && d <= 0.0) {

@@ -1,0 +1,367 @@
+//! The default method over a record's samples, read from its arrays.
+//!
+//! The general path takes a record as a stream of linear pieces
+//! (`advance_pieces`) and pays, per sample, for building the piece, for
+//! a substep length that differs from its map's by rounding, and for the
+//! exact energy forms. Here whole sample intervals of a uniform record
+//! (`dt` the record's spacing, `n` equal substeps per sample so that
+//! `ω dt / n <= 0.25`) go through a loop that reads the samples directly
+//! and does only the quick tests of `folded.rs`: a substep is taken when
+//! its guards and peaks are proved from its ends and `h²/8 sup|y''|`
+//! (or, for a peak, the rate test of `folded::raise_peak_proved`), and
+//! handed to the general path otherwise (every switch, and the substeps
+//! the quick tests cannot decide). What is exact there is exact here:
+//! the same map, the structure's input and viscous work from the same
+//! forms, and the upper clusters' input work in closed form per run.
+
+use super::exact_map::{dot, ExactMap};
+use super::folded::{raise_peak_proved, stays_positive};
+use super::lean::safe_accel_band;
+use super::{move_bodies, Excitation, SimError, Simulator};
+use crate::physics::hermite;
+use crate::physics::mode::Guard;
+use crate::physics::params::MAX_BODIES;
+
+/// Whole samples of a record, from the simulator's current time
+/// (`time[0]`) to `time[last]`: the ground acceleration is `scale *
+/// accel[k] + ag_offset` at `time[k]`, linear in between; `fext` is
+/// constant.
+#[derive(Clone, Copy, Debug)]
+pub struct Samples<'a> {
+    /// Sample times (s), `time[0]` the simulator's current time.
+    pub time: &'a [f64],
+    /// The record's accelerations at those times (m/s²).
+    pub accel: &'a [f64],
+    /// Factor on the record.
+    pub scale: f64,
+    /// Held ground acceleration added to the record (m/s²).
+    pub ag_offset: f64,
+    /// Held external force on the structure (N).
+    pub fext: f64,
+    /// The record's spacing (its first interval).
+    pub dt: f64,
+}
+
+impl Samples<'_> {
+    #[inline(always)]
+    fn ag(&self, k: usize) -> f64 {
+        self.scale * self.accel[k] + self.ag_offset
+    }
+
+    /// The piece of sample interval `k` from `t` on, for the general path.
+    pub fn piece(&self, k: usize, t: f64) -> (f64, Excitation) {
+        let (t0, t1) = (self.time[k], self.time[k + 1]);
+        let slope = self.scale * (self.accel[k + 1] - self.accel[k]) / (t1 - t0);
+        let exc = Excitation {
+            ag: self.ag(k) + slope * (t - t0),
+            ag_rate: slope,
+            fext: self.fext,
+            fext_rate: 0.0,
+        };
+        (t1, exc)
+    }
+
+    /// Whether interval `k` is `dt` long up to the rounding of its times.
+    fn is_uniform(&self, k: usize) -> bool {
+        let (t0, t1) = (self.time[k], self.time[k + 1]);
+        ((t1 - t0) - self.dt).abs() <= 1e-15 * (t1.abs() + self.dt)
+    }
+}
+
+/// Where a run of the loop stopped: sample `k`, after `sub` of its substeps.
+struct Stop {
+    k: usize,
+    sub: usize,
+}
+
+impl Simulator {
+    /// Whether [`Simulator::advance_samples`] applies: the default method,
+    /// inputs held constant (no slopes).
+    pub fn takes_samples(&self, extra: &Excitation) -> bool {
+        self.exact && extra.ag_rate == 0.0 && extra.fext_rate == 0.0
+    }
+
+    /// Advances over the samples of `s` (the simulator is at `s.time[0]`),
+    /// as `advance_pieces` would over their pieces, up to rounding.
+    pub fn advance_samples(&mut self, s: &Samples<'_>) -> Result<(), SimError> {
+        let last = s.time.len() - 1;
+        if last == 0 {
+            return Ok(());
+        }
+        // A jump of Fext at the start, and the checks, as a piece's start.
+        let (t1, exc) = s.piece(0, self.t);
+        self.begin_piece(t1, &exc)?;
+        let n_sub = super::substeps(s.dt, self.map_step()) as usize;
+        let mut k = 0;
+        // Runs go up to the next interval that is not `dt` long.
+        let mut uniform_to = k;
+        while k < last {
+            if uniform_to <= k {
+                uniform_to = (k..last).find(|&i| !s.is_uniform(i)).unwrap_or(last);
+            }
+            let stop = if k < uniform_to {
+                self.sample_run(s, k, uniform_to, n_sub)
+            } else {
+                Stop { k, sub: 0 }
+            };
+            if stop.k >= last {
+                break;
+            }
+            // The general path takes the rest of that sample interval.
+            let (t1, exc) = s.piece(stop.k, self.t);
+            self.advance_pieces(std::iter::once((t1, exc)))?;
+            k = stop.k + 1;
+        }
+        self.t = s.time[last];
+        self.ag_now = s.ag(last);
+        self.fext_now = s.fext;
+        self.check_finite()
+    }
+
+    fn sample_run(&mut self, s: &Samples<'_>, k: usize, last: usize, n_sub: usize) -> Stop {
+        if n_sub == 1 {
+            self.sample_run_nc::<true>(s, k, last, n_sub)
+        } else {
+            self.sample_run_nc::<false>(s, k, last, n_sub)
+        }
+    }
+
+    fn sample_run_nc<const ONE: bool>(
+        &mut self,
+        s: &Samples<'_>,
+        k: usize,
+        last: usize,
+        n_sub: usize,
+    ) -> Stop {
+        match self.dynamics.n_clusters {
+            1 => self.sample_run_clusters::<1, ONE>(s, k, last, n_sub),
+            2 => self.sample_run_clusters::<2, ONE>(s, k, last, n_sub),
+            3 => self.sample_run_clusters::<3, ONE>(s, k, last, n_sub),
+            4 => self.sample_run_clusters::<4, ONE>(s, k, last, n_sub),
+            5 => self.sample_run_clusters::<5, ONE>(s, k, last, n_sub),
+            6 => self.sample_run_clusters::<6, ONE>(s, k, last, n_sub),
+            7 => self.sample_run_clusters::<7, ONE>(s, k, last, n_sub),
+            8 => self.sample_run_clusters::<8, ONE>(s, k, last, n_sub),
+            _ => self.sample_run_clusters::<MAX_BODIES, ONE>(s, k, last, n_sub),
+        }
+    }
+
+    /// Takes the substeps of samples `k..last` on the exact map, in the
+    /// current mode with `NC` clusters (cluster 0 the structure's), until a
+    /// quick test fails; commits what it took and returns where it stopped.
+    /// `ONE`: one substep per sample interval (`n_sub == 1`).
+    fn sample_run_clusters<const NC: usize, const ONE: bool>(
+        &mut self,
+        s: &Samples<'_>,
+        k_start: usize,
+        last: usize,
+        n_sub: usize,
+    ) -> Stop {
+        let h = s.dt / n_sub as f64;
+        let (sys, d) = (&self.sys, &self.dynamics);
+        let map_index = self.maps.index(sys, d.mass[0], h);
+        let map: &ExactMap = self.maps.get(map_index);
+        let guards = &d.guards[..d.n_guards];
+        let (band_lo, band_hi) = safe_accel_band(guards);
+        let has_band = guards.iter().any(|g| matches!(g, Guard::Stuck { .. }));
+        let mut slip_sign = [0.0; NC];
+        for g in guards {
+            if let Guard::Slip { lo, sign, .. } = *g {
+                slip_sign[lo] = sign;
+            }
+        }
+        let iface: [usize; NC] = std::array::from_fn(|m| {
+            if NC > 1 {
+                d.moving[m.min(NC.saturating_sub(2))].j
+            } else {
+                0
+            }
+        });
+        // Constants of the run: the structure cluster's forcing per unit
+        // mass is `cf - ag`, its absolute acceleration `cf - w2 u - cm v`.
+        let fm = s.fext * d.inv_mass0;
+        let cf = d.slip_load[0] * d.inv_mass0 + fm;
+        let (w2, cm, inv_h, h2_8) = (map.w2, map.cm, 1.0 / h, 0.125 * h * h);
+        let inv_n = 1.0 / n_sub as f64;
+        let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
+        let dv_c = accel_c.map(|a| h * a);
+        let du_c = accel_c.map(|a| 0.5 * h * h * a);
+
+        let mut u0 = self.u[0];
+        let mut vel: [f64; NC] = std::array::from_fn(|c| self.v[d.bottom[c]]);
+        let vel_start = vel;
+        let mut slip: [f64; NC] = std::array::from_fn(|m| {
+            let j = iface[m];
+            if NC > 1 {
+                self.u[j] - self.u[j - 1]
+            } else {
+                0.0
+            }
+        });
+        let slip_start = slip;
+        let mut shift = [0.0; NC];
+        let mut peak_slip: [f64; NC] = std::array::from_fn(|m| self.peak_slip[iface[m]]);
+        let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
+        let (mut e_in, mut e_visc) = (0.0, 0.0);
+        let mut a_abs = cf - w2 * u0 - cm * vel[0];
+        let mut taken = 0u64;
+        let mut stop = Stop { k: last, sub: 0 };
+
+        let mut k = k_start;
+        let mut a_s = s.ag(k);
+        'samples: while k < last {
+            let ag_next = s.ag(k + 1);
+            let dag = if ONE { 0.0 } else { (ag_next - a_s) * inv_n };
+            for sub in 0..(if ONE { 1 } else { n_sub }) {
+                let a_e = if ONE || sub + 1 == n_sub {
+                    ag_next
+                } else {
+                    a_s + dag
+                };
+                let dp = (a_s - a_e) * inv_h;
+                let z = [u0, vel[0], cf - a_s, dp];
+                let (u1, v1) = (dot(&map.u, &z), dot(&map.v, &z));
+                let a1 = cf - w2 * u1 - cm * v1;
+                let s3 = map.sup_v(3, &z);
+                let sag = h2_8 * s3;
+                // Stuck interfaces: the absolute acceleration stays in the band.
+                if has_band {
+                    let (low, high) = if a_abs < a1 { (a_abs, a1) } else { (a1, a_abs) };
+                    if !(low - sag > band_lo && high + sag < band_hi) {
+                        stop = Stop { k, sub };
+                        break 'samples;
+                    }
+                }
+                // Upper clusters: exact polynomials; the ground's terms are
+                // common to all.
+                let g1 = 0.5 * h * (a_s + a_e);
+                let g2 = h * h * (a_s / 3.0 + a_e / 6.0);
+                let (mut du, mut v_end) = ([0.0; NC], [0.0; NC]);
+                (du[0], v_end[0]) = (u1 - u0, v1);
+                for c in 1..NC {
+                    du[c] = h * vel[c] + du_c[c] - g2;
+                    v_end[c] = vel[c] + dv_c[c] - g1;
+                }
+                let ag_rate = -dp;
+                let s2 = if NC > 1 { map.sup_v(2, &z) } else { 0.0 };
+                for m in 0..NC - 1 {
+                    let sign = slip_sign[m];
+                    if sign == 0.0 {
+                        continue;
+                    }
+                    let (g0, g1) = (
+                        sign * (vel[m + 1] - vel[m]),
+                        sign * (v_end[m + 1] - v_end[m]),
+                    );
+                    let holds = if m == 0 {
+                        let bound = s2 + ag_rate.abs();
+                        let sag_g = h2_8 * bound;
+                        (g0 > sag_g && g1 > sag_g) || {
+                            let (r0, r1) = (sign * (accel_c[1] - a_abs), sign * (accel_c[1] - a1));
+                            stays_positive([g0, r0, g1, r1], h, bound)
+                        }
+                    } else {
+                        // Linear in time between two upper clusters.
+                        g0 >= 0.0 && g1 > 0.0
+                    };
+                    if !holds {
+                        stop = Stop { k, sub };
+                        break 'samples;
+                    }
+                }
+                // Peaks of |u0| and |A0| (u'' = v', A'' = v''').
+                let (e0, e1) = (u0.abs(), u1.abs());
+                let ends = if e0 > e1 { e0 } else { e1 };
+                if ends + sag * map.one_over_three > peak_u0
+                    && !raise_peak_proved(&mut peak_u0, [u0, vel[0], u1, v1], h, s3, || {
+                        map.sup_v(2, &z)
+                    })
+                {
+                    stop = Stop { k, sub };
+                    break 'samples;
+                }
+                let (e0, e1) = (a_abs.abs(), a1.abs());
+                let ends = if e0 > e1 { e0 } else { e1 };
+                if ends + sag > peak_a0 {
+                    // Rates: A' = -w2 v - cm (A - ag) (no slope of Fext here).
+                    let j0 = -w2 * vel[0] - cm * (a_abs - a_s);
+                    let j1 = -w2 * v1 - cm * (a1 - a_e);
+                    let fifth = map.five_over_three * s3;
+                    if !raise_peak_proved(&mut peak_a0, [a_abs, j0, a1, j1], h, fifth, || {
+                        map.sup_v(4, &z)
+                    }) {
+                        stop = Stop { k, sub };
+                        break 'samples;
+                    }
+                }
+                // Slips: slip''' = -(ag' + v0''), slip'''' = -v0''' at the
+                // structure; a quadratic in time between upper clusters.
+                let mut new_slip = slip;
+                for m in 0..NC - 1 {
+                    let increment = du[m + 1] - du[m];
+                    let (vr0, vr1) = (vel[m + 1] - vel[m], v_end[m + 1] - v_end[m]);
+                    new_slip[m] = slip[m] + increment;
+                    let ends = [slip[m], vr0, new_slip[m], vr1];
+                    if m == 0 {
+                        let third = s2 + ag_rate.abs();
+                        if !raise_peak_proved(&mut peak_slip[m], ends, h, s3, || third) {
+                            stop = Stop { k, sub };
+                            break 'samples;
+                        }
+                    } else {
+                        let (y0, y1) = (ends[0], ends[2]);
+                        hermite::raise_peak(&mut peak_slip[m], y0, vr0, y1, vr1, h);
+                    }
+                }
+                // Taken: the work of the structure's cluster (per unit mass,
+                // and per unit damping) as in `folded`.
+                let iu = dot(&map.int_u, &z);
+                e_in += (fm - a_s) * (u1 - u0) + dp * (h * u1 - iu);
+                e_visc += map.int_v2(&z);
+                slip = new_slip;
+                for c in 1..NC {
+                    shift[c] += du[c];
+                }
+                (u0, vel, a_abs, a_s) = (u1, v_end, a1, a_e);
+                taken += 1;
+            }
+            k += 1;
+        }
+
+        if taken > 0 {
+            let d = &self.dynamics;
+            // Input work on the upper clusters over the run, exact: with
+            // v_c' = A_c - ag, -m ag v_c = d(m v_c²/2)/dt - m A_c v_c.
+            let mut upper = 0.0;
+            for c in 1..NC {
+                let m = d.mass[c];
+                upper += 0.5 * m * (vel[c] * vel[c] - vel_start[c] * vel_start[c])
+                    - m * accel_c[c] * shift[c];
+            }
+            self.e_input += d.mass[0] * e_in + upper;
+            self.e_viscous += self.sys.c * e_visc;
+            let (mut shift_all, mut vel_all) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
+            shift_all[..NC].copy_from_slice(&shift);
+            vel_all[..NC].copy_from_slice(&vel);
+            move_bodies(
+                &mut self.u,
+                &mut self.v,
+                d,
+                self.sys.n,
+                u0,
+                &shift_all,
+                &vel_all,
+            );
+            for m in 0..NC - 1 {
+                let j = iface[m];
+                self.e_friction[j] -= d.slip_force[j] * (slip[m] - slip_start[m]);
+                self.peak_slip[j] = peak_slip[m];
+            }
+            self.peak_u0 = peak_u0;
+            self.peak_a0 = peak_a0;
+            self.stats.steps += taken;
+            self.t = s.time[stop.k] + stop.sub as f64 * h;
+        }
+        stop
+    }
+}
