@@ -156,3 +156,58 @@ fn bare_structure_is_exact_on_broadband_records() {
         assert!(residual < 1e-9 * input);
     }
 }
+
+#[test]
+fn a_whole_record_in_one_call_is_exact() {
+    // The path that reads a record's samples directly (one call over the
+    // whole record, as the FMU with `recordFile` and the batch entry point
+    // run it), against the exact reference: uniform records from t = 0,
+    // records starting later, records with irregular intervals (the path
+    // hands those to the general one), and periods short enough that a
+    // sample interval is cut into several substeps (ω dt > 0.25).
+    let seed = seed() ^ 0x5a3e1e5;
+    let mut rng = Rng(seed);
+    let mut events = 0;
+    for (case, n) in [0usize, 1, 2, 3, 5, 8].into_iter().enumerate() {
+        let tp = if case % 2 == 0 {
+            0.04 + 0.1 * rng.next_f64()
+        } else {
+            0.3 * 10f64.powf(rng.next_f64())
+        };
+        let dt = if rng.next_f64() < 0.5 { 0.005 } else { 0.01 };
+        let mut gm = broadband_record(&mut rng, 12.0, dt);
+        match case % 3 {
+            // Starts later: zero ground acceleration before the first sample.
+            1 => gm.time.iter_mut().for_each(|t| *t += 2.3),
+            // Every 7th interval 0.6 dt long.
+            2 => {
+                let mut t = 0.0;
+                for (i, x) in gm.time.iter_mut().enumerate() {
+                    *x = t;
+                    t += if i % 7 == 3 { 0.6 * dt } else { dt };
+                }
+            }
+            _ => {}
+        }
+        let p = random_scene(&mut rng, n, tp, case % 2 == 1);
+        let exact = Exact::new(&p).run(&gm, 16);
+        let mut s = Simulator::new(&p, &Settings::default()).unwrap();
+        ground::record::run(&mut s, &gm, 1.0).unwrap();
+        let o = s.outputs();
+        let mut peak = rel(o.peak_up, exact.peak_u0);
+        for j in 0..n {
+            let scale = exact.peak_slip[j].max(exact.peak_u0);
+            peak = peak.max((o.peak_slip[j] - exact.peak_slip[j]).abs() / scale);
+        }
+        let energy = o.energy_residual().abs() / o.e_input.abs();
+        let what = format!("seed {seed}: case {case}, N = {n}, Tp {tp:.3}, dt {dt}");
+        eprintln!(
+            "{what}: peaks {peak:.1e}, energy {energy:.1e}, {} events",
+            o.n_events
+        );
+        assert!(peak < 1e-9, "{what}: peak error {peak:e}");
+        assert!(energy < 1e-9, "{what}: energy residual {energy:e}");
+        events += o.n_events;
+    }
+    assert!(events > 50, "the cases must switch");
+}
