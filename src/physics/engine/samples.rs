@@ -74,6 +74,64 @@ struct Stop {
     sub: usize,
 }
 
+/// Sums over a run of the products `z_i z_j` and of `z_i`, for the
+/// substeps' start vectors `z = [u, v, p, p']` (one map, one mode): the
+/// structure cluster's viscous and input work are quadratic in `z`, so
+/// their sums over the run follow from these at its end, instead of two
+/// quadratic forms per substep.
+#[derive(Default)]
+struct WorkSums {
+    /// Packed as `ExactMap::quad`: 00, 11, 22, 33, 01, 02, 03, 12, 13, 23.
+    products: [f64; 10],
+    linear: [f64; 4],
+}
+
+impl WorkSums {
+    #[inline(always)]
+    fn add(&mut self, z: &[f64; 4]) {
+        let (s, [z0, z1, z2, z3]) = (&mut self.products, *z);
+        s[0] += z0 * z0;
+        s[1] += z1 * z1;
+        s[2] += z2 * z2;
+        s[3] += z3 * z3;
+        s[4] += z0 * z1;
+        s[5] += z0 * z2;
+        s[6] += z0 * z3;
+        s[7] += z1 * z2;
+        s[8] += z1 * z3;
+        s[9] += z2 * z3;
+        for (l, x) in self.linear.iter_mut().zip(z) {
+            *l += x;
+        }
+    }
+
+    /// `Σ ∫ v² dτ`: the sum of `ExactMap::int_v2` over the substeps.
+    fn int_v2(&self, map: &ExactMap) -> f64 {
+        map.quad
+            .iter()
+            .zip(&self.products)
+            .map(|(q, s)| q * s)
+            .sum()
+    }
+
+    /// The input work per unit mass, summed: per substep `(p - L) (u1 - u)
+    /// + p' (h u1 - ∫u)` with `u1 = U z` (as `folded`), `L` the mode's load
+    /// per unit mass.
+    fn input(&self, map: &ExactMap, load_accel: f64) -> f64 {
+        let (s, l, u) = (&self.products, &self.linear, &map.u);
+        let h = map.h;
+        // Σ (p - L) (U z - u): the rows times the sums of p z_j and of z_j,
+        // with U's first entry less one (the `- u`).
+        let u0m1 = u[0] - 1.0;
+        let with_p = u0m1 * s[5] + u[1] * s[7] + u[2] * s[2] + u[3] * s[9];
+        let with_1 = u0m1 * l[0] + u[1] * l[1] + u[2] * l[2] + u[3] * l[3];
+        // Σ p' (h U - I) z.
+        let w: [f64; 4] = std::array::from_fn(|j| h * u[j] - map.int_u[j]);
+        let with_rate = w[0] * s[6] + w[1] * s[8] + w[2] * s[9] + w[3] * s[3];
+        with_p - load_accel * with_1 + with_rate
+    }
+}
+
 impl Simulator {
     /// Whether [`Simulator::advance_samples`] applies: the default method,
     /// inputs held constant (no slopes).
@@ -202,7 +260,7 @@ impl Simulator {
         let mut shift = [0.0; NC];
         let mut peak_slip: [f64; NC] = std::array::from_fn(|m| self.peak_slip[iface[m]]);
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
-        let (mut e_in, mut e_visc) = (0.0, 0.0);
+        let mut work = WorkSums::default();
         let mut a_abs = cf - w2 * u0 - cm * vel[0];
         let mut taken = 0u64;
         let mut stop = Stop { k: last, sub: 0 };
@@ -313,11 +371,8 @@ impl Simulator {
                         hermite::raise_peak(&mut peak_slip[m], y0, vr0, y1, vr1, h);
                     }
                 }
-                // Taken: the work of the structure's cluster (per unit mass,
-                // and per unit damping) as in `folded`.
-                let iu = dot(&map.int_u, &z);
-                e_in += (fm - a_s) * (u1 - u0) + dp * (h * u1 - iu);
-                e_visc += map.int_v2(&z);
+                // Taken.
+                work.add(&z);
                 slip = new_slip;
                 for c in 1..NC {
                     shift[c] += du[c];
@@ -338,8 +393,10 @@ impl Simulator {
                 upper += 0.5 * m * (vel[c] * vel[c] - vel_start[c] * vel_start[c])
                     - m * accel_c[c] * shift[c];
             }
-            self.e_input += d.mass[0] * e_in + upper;
-            self.e_viscous += self.sys.c * e_visc;
+            let map = self.maps.get(map_index);
+            let load_accel = d.slip_load[0] * d.inv_mass0;
+            self.e_input += d.mass[0] * work.input(map, load_accel) + upper;
+            self.e_viscous += self.sys.c * work.int_v2(map);
             let (mut shift_all, mut vel_all) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
             shift_all[..NC].copy_from_slice(&shift);
             vel_all[..NC].copy_from_slice(&vel);
