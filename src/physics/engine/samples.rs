@@ -114,9 +114,9 @@ impl WorkSums {
             .sum()
     }
 
-    /// The input work per unit mass, summed: per substep `(p - L) (u1 - u)
-    /// + p' (h u1 - ∫u)` with `u1 = U z` (as `folded`), `L` the mode's load
-    /// per unit mass.
+    /// The input work per unit mass, summed: per substep
+    /// `(p - L) (u1 - u) + p' (h u1 - ∫u)` with `u1 = U z` (as `folded`),
+    /// `L` the mode's load per unit mass.
     fn input(&self, map: &ExactMap, load_accel: f64) -> f64 {
         let (s, l, u) = (&self.products, &self.linear, &map.u);
         let h = map.h;
