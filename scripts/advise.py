@@ -49,6 +49,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import study  # noqa: E402
+import sll  # noqa: E402
 from sll import seismic, study_tasks  # noqa: E402
 
 FLOOR = 1e-6  # relative differences below the engine's accuracy target count as equal
@@ -501,6 +502,11 @@ def main(argv=None):
         records = sorted(p for p in args.records.iterdir() if p.suffix.lower() in (".at2", ".csv"))
         if not records:
             ap.error(f"no .AT2 or .csv files in {args.records}")
+        for path in records:  # a bad file is named with its line, not a traceback
+            try:
+                sll.read_record(path)
+            except (ValueError, OSError) as e:
+                ap.error(f"--records: {e}")
         scale = args.scale
         suite_name = f"{args.records}" + (f" x {scale:g}" if scale != 1.0 else "")
     else:

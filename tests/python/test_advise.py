@@ -231,3 +231,13 @@ def test_the_command_line_writes_json_report_and_png_and_rejects_bad_input(recor
                         "--mu-uncertainty", "0", "--json", str(out)]) == 0
     r = json.loads(out.read_text())
     assert r["rule"]["cost_tolerance"] == 0.1 and len(r["friction_sweep"]) == 1
+
+
+def test_a_bad_record_in_the_folder_is_named_with_its_line(tmp_path, capsys):
+    # Expected: an argparse error naming the file, the line and the bad text, not a traceback.
+    (tmp_path / "ok.csv").write_text("time,accel\n0,0\n0.01,0.5\n0.02,0\n")
+    (tmp_path / "bad.csv").write_text("time,accel\n0,0\n0.01,abc\n")
+    with pytest.raises(SystemExit):
+        advise.main(["--Tp", "0.5", "--alpha", "0.3", "--mu", "0.2", "--records", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert "--records:" in err and "bad.csv:3" in err and "0.01,abc" in err, err
