@@ -24,6 +24,7 @@ use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::physics::system::System;
 
 mod events;
+mod exact_events;
 mod exact_map;
 mod folded;
 mod lean;
@@ -239,12 +240,13 @@ impl Simulator {
             match self.settings.method {
                 Method::EventLocated if self.exact => loop {
                     // Substeps proved event-free on the exact map; the one
-                    // it cannot prove at fine RK4 steps with located events.
+                    // it cannot prove on the exact motion with events
+                    // located on it.
                     pending = self.folded_steps(&mut piece, &mut pieces);
                     if piece.i > piece.n {
                         break;
                     }
-                    self.fine_steps(piece.end_of(piece.i), &piece);
+                    self.exact_substep(piece.end_of(piece.i), &piece);
                     piece.i += 1;
                 },
                 Method::EventLocated => loop {
