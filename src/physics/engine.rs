@@ -145,6 +145,9 @@ impl Simulator {
                 };
             }
         }
+        // The resolution rebuilds the dynamics only when it changes the
+        // mode: the slips set here must have theirs already.
+        self.dynamics = Dynamics::new(&self.sys, &self.mode);
         self.resolve_mode(0);
         self.peak_u0 = self.u[0].abs();
         self.peak_slip = [0.0; MAX_BODIES];
