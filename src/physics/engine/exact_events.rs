@@ -386,10 +386,7 @@ impl Flow {
                 }
                 let (vh, vl) = (self.velocity(sim, hi), self.velocity(sim, lo));
                 let deg = vh.deg.max(vl.deg);
-                let mut c = [0.0; N_COEF];
-                for k in 0..=deg {
-                    c[k] = sign * (vh.c[k] - vl.c[k]);
-                }
+                let c = std::array::from_fn(|k| sign * (vh.c[k] - vl.c[k]));
                 let p = Poly::new(c, deg);
                 [(c[0] <= p.spread(1.0)).then_some(p), None]
             }
@@ -729,6 +726,16 @@ mod tests {
         let past = g.past_zero_start().unwrap();
         assert!((first_zero_from_start(&past).unwrap() - 0.625).abs() < 1e-12);
         assert!(poly(&[0.0, -1.0, 3.0]).past_zero_start().is_none());
+        // A guard hovering 1e-18 above zero over a stretch of ~0.01
+        // (1e-18 + 1e-3 (s - 0.5)^6): no proof reaches across it within
+        // the budget, and the search says so instead of guessing.
+        let mut hover = from_roots(1e-3, &[0.5; 6]);
+        hover.c[0] += 1e-18;
+        let (g0, d0) = hover.eval_d(0.0);
+        assert_eq!(
+            first_zero(&hover, [0.0, g0, d0], 1.0, 1e-13),
+            Err(Undecided)
+        );
     }
 
     fn one_block(zeta: f64, mu: f64) -> Params {
