@@ -44,7 +44,7 @@ const EVALUATION_BUDGET: u32 = 400;
 const MAX_CRITICAL_POINTS: usize = 8;
 
 /// A polynomial `Σ c[k] s^k` on `s ∈ [0, 1]`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Poly {
     c: [f64; N_COEF],
     deg: usize,
@@ -280,6 +280,7 @@ fn raise_peak_exact(
 /// The structure's cluster over the rest of a substep, of length `h`, from
 /// the current state in the current mode: `u`, `v` and the absolute
 /// acceleration as polynomials in `s = τ / h`.
+#[derive(Default)]
 struct Flow {
     h: f64,
     u: Poly,
@@ -303,7 +304,10 @@ struct Flow {
 }
 
 impl Flow {
-    fn new(sim: &Simulator, exc: &Excitation, t_ref: f64, h: f64) -> Flow {
+    /// Starts the stretch of length `h` from the simulator's state, with
+    /// Taylor polynomials of degree `deg` (filled in place: a flow is three
+    /// arrays of coefficients).
+    fn start(&mut self, sim: &Simulator, exc: &Excitation, t_ref: f64, h: f64, deg: usize) {
         let (sys, d) = (&sim.sys, &sim.dynamics);
         let inv_mass = d.inv_mass0;
         let (w2, cm) = (sys.k * inv_mass, sys.c * inv_mass);
@@ -315,8 +319,7 @@ impl Flow {
         let p1 = exc.fext_rate * inv_mass - exc.ag_rate;
         // Taylor terms (A h)^k z / k!: their u and v parts are the
         // coefficients in s.
-        let deg = degree(h, w2, cm);
-        let (mut u, mut v, mut accel) = ([0.0; N_COEF], [0.0; N_COEF], [0.0; N_COEF]);
+        let (u, v, accel) = (&mut self.u.c, &mut self.v.c, &mut self.accel.c);
         let mut y = [sim.u[0], sim.v[0], p0, p1];
         (u[0], v[0]) = (y[0], y[1]);
         for k in 1..=deg {
@@ -330,23 +333,13 @@ impl Flow {
         }
         accel[0] += p0 + ag0;
         accel[1] += (p1 + exc.ag_rate) * h;
-        let (u, v, accel) = (Poly::new(u, deg), Poly::new(v, deg), Poly::new(accel, deg));
-        Flow {
-            h,
-            u_spread: u.spread(1.0),
-            v_spread: v.spread(1.0),
-            accel_spread: accel.spread(1.0),
-            accel_linear: [p0 + ag0, p1 + exc.ag_rate],
-            w2,
-            cm,
-            u,
-            v,
-            accel,
-            ag0,
-            ag_rate: exc.ag_rate,
-            q0,
-            p1,
-        }
+        (self.u.deg, self.v.deg, self.accel.deg) = (deg, deg, deg);
+        self.u_spread = self.u.spread(1.0);
+        self.v_spread = self.v.spread(1.0);
+        self.accel_spread = self.accel.spread(1.0);
+        self.accel_linear = [p0 + ag0, p1 + exc.ag_rate];
+        (self.h, self.w2, self.cm, self.ag0, self.ag_rate) = (h, w2, cm, ag0, exc.ag_rate);
+        (self.q0, self.p1) = (q0, p1);
     }
 
     /// Velocity of cluster `c` (relative to the support) as a polynomial.
@@ -428,9 +421,14 @@ impl Simulator {
         let mut muted: u32 = 0;
         let mut fired_at_once: u32 = 0;
         let mut events = 0;
+        // One degree for every stretch: that of the longest, at the bare
+        // structure's rates (the highest of any mode).
+        let (sys, inv_mass) = (&self.sys, 1.0 / self.sys.mass[0]);
+        let deg = degree(t1 - self.t, sys.k * inv_mass, sys.c * inv_mass);
+        let mut flow = Flow::default();
         while self.t < t1 {
             let h = t1 - self.t;
-            let flow = Flow::new(self, exc, t_ref, h);
+            flow.start(self, exc, t_ref, h, deg);
             let tol = EVENT_TIME_TOL / h;
             let next = match self.next_event(&flow, muted, tol) {
                 Ok(next) => next,
