@@ -200,7 +200,12 @@ pub(super) fn first_zero(
 /// only one: Newton's method kept inside the bracket (bisection when it
 /// leaves it), to well below `tol`.
 fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f64 {
-    let mut x = a + ga / (ga - gb) * (b - a);
+    // The secant, or the middle from a start clamped at zero.
+    let mut x = if ga > 0.0 {
+        a + ga / (ga - gb) * (b - a)
+    } else {
+        0.5 * (a + b)
+    };
     for _ in 0..100 {
         if b - a <= tol {
             return b;
