@@ -38,7 +38,11 @@ fn main() {
     rigid.mus[0] = 10.0;
     rigid.muk[0] = 10.0;
     let two = Params::default();
-    let scenes = [("N = 1", one), ("N = 1, never slides", rigid), ("two-block scene", two)];
+    let scenes = [
+        ("N = 1", one),
+        ("N = 1, never slides", rigid),
+        ("two-block scene", two),
+    ];
     let dt = gm.time[1] - gm.time[0];
     let omega = 2.0 * std::f64::consts::PI / Params::default().tp;
 

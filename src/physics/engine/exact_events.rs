@@ -70,11 +70,8 @@ impl Poly {
 
     /// `Σ_(k >= 1) |c_k| s^k`: a bound of `|p(σ) - p(0)|` over `[0, s]`.
     fn spread(&self, s: f64) -> f64 {
-        let mut y = 0.0;
-        for k in (1..=self.deg).rev() {
-            y = (y + self.c[k].abs()) * s;
-        }
-        y
+        let rest = &self.c[1..=self.deg];
+        rest.iter().rev().fold(0.0, |y, c| (y + c.abs()) * s)
     }
 
     /// `sign p + offset`.
@@ -327,14 +324,15 @@ impl Flow {
         let (u, v, accel) = (&mut self.u.c, &mut self.v.c, &mut self.accel.c);
         let mut y = [sim.u[0], sim.v[0], p0, p1];
         (u[0], v[0]) = (y[0], y[1]);
-        for k in 1..=deg {
-            let f = h * INV[k - 1];
+        let terms = u[1..=deg].iter_mut().zip(&mut v[1..=deg]).zip(&INV[..deg]);
+        for ((uk, vk), inv) in terms {
+            let f = h * inv;
             y = [f * y[1], f * (y[2] - w2 * y[0] - cm * y[1]), f * y[3], 0.0];
-            (u[k], v[k]) = (y[0], y[1]);
+            (*uk, *vk) = (y[0], y[1]);
         }
         // A0 = p - w2 u - cm v + ag.
-        for k in 0..=deg {
-            accel[k] = -w2 * u[k] - cm * v[k];
+        for ((a, uk), vk) in accel[..=deg].iter_mut().zip(&u[..=deg]).zip(&v[..=deg]) {
+            *a = -w2 * uk - cm * vk;
         }
         accel[0] += p0 + ag0;
         accel[1] += (p1 + exc.ag_rate) * h;
