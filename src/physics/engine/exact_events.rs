@@ -59,11 +59,12 @@ impl Poly {
     /// factor covers the rounding of the coefficients and of the sums).
     fn bounds(&self) -> [f64; 2] {
         let (mut m2, mut m3) = (0.0, 0.0);
-        for k in 2..=self.deg {
-            let kf = k as f64;
-            let term = kf * (kf - 1.0) * self.c[k].abs();
+        let mut kf = 2.0;
+        for c in self.c.iter().take(self.deg + 1).skip(2) {
+            let term = kf * (kf - 1.0) * c.abs();
             m2 += term;
             m3 += term * (kf - 2.0);
+            kf += 1.0;
         }
         [m2 * (1.0 + 1e-12), m3 * (1.0 + 1e-12)]
     }
@@ -72,6 +73,12 @@ impl Poly {
     fn spread(&self, s: f64) -> f64 {
         let rest = &self.c[1..=self.deg];
         rest.iter().rev().fold(0.0, |y, c| (y + c.abs()) * s)
+    }
+
+    fn negate(&mut self) {
+        for c in &mut self.c[..=self.deg] {
+            *c = -*c;
+        }
     }
 
     /// `sign p + offset`.
@@ -102,20 +109,18 @@ impl Poly {
 
     #[inline]
     fn eval(&self, s: f64) -> f64 {
-        let mut y = self.c[self.deg];
-        for k in (0..self.deg).rev() {
-            y = y * s + self.c[k];
-        }
-        y
+        let (top, rest) = self.c[..=self.deg].split_last().unwrap();
+        rest.iter().rev().fold(*top, |y, c| y * s + c)
     }
 
     /// Value and derivative at `s`.
     #[inline]
     fn eval_d(&self, s: f64) -> (f64, f64) {
-        let (mut y, mut d) = (self.c[self.deg], 0.0);
-        for k in (0..self.deg).rev() {
+        let (top, rest) = self.c[..=self.deg].split_last().unwrap();
+        let (mut y, mut d) = (*top, 0.0);
+        for c in rest.iter().rev() {
             d = d * s + y;
-            y = y * s + self.c[k];
+            y = y * s + c;
         }
         (y, d)
     }
@@ -254,27 +259,29 @@ fn raise_peak_exact(
     let Some(&lead) = dy.coefs().iter().find(|x| x.abs() > 1e-12 * scale) else {
         return Ok(()); // y is constant
     };
-    let mut sign = if lead < 0.0 { -1.0 } else { 1.0 };
-    let mut a = 0.0;
+    // y' with the sign it has just after 0; searched past a zero start.
+    let mut g = dy;
+    if lead < 0.0 {
+        g.negate();
+    }
+    let past = (g.c[0] <= 1e-12 * scale)
+        .then(|| g.past_zero_start())
+        .flatten();
+    let start = past.as_ref().unwrap_or(&g);
+    let (g0, d0) = start.eval_d(0.0);
+    let mut zero = first_zero(start, [0.0, g0.max(0.0), d0], e, tol)?;
     for _ in 0..MAX_CRITICAL_POINTS {
-        // The first sign change of y' after `a`.
-        let g = dy.affine(sign, 0.0);
-        let r = if a == 0.0 {
-            let g = g.past_zero_start().unwrap_or(g);
-            let (g0, d0) = g.eval_d(0.0);
-            first_zero(&g, [0.0, g0.max(0.0), d0], e, tol)?
-        } else {
-            let (ga, da) = g.eval_d(a);
-            first_zero(&g, [a, ga.max(0.0), da], e, tol)?
-        };
-        let Some(r) = r else {
+        let Some(r) = zero else {
             return Ok(());
         };
         let at = y.eval(r).abs();
         if at > *peak {
             *peak = at;
         }
-        (a, sign) = (r, -sign);
+        // The next sign change of y', from the other side.
+        g.negate();
+        let (ga, da) = g.eval_d(r);
+        zero = first_zero(&g, [r, ga.max(0.0), da], e, tol)?;
     }
     Err(Undecided)
 }
