@@ -39,6 +39,11 @@ const N_COEF: usize = 24;
 /// then taken by fine RK4 steps (`Simulator::fine_steps`).
 const EVALUATION_BUDGET: u32 = 400;
 
+/// Width (fraction of a stretch) to which a peak's critical point is
+/// located: the peak is then within `sup|y''| δ² / 2`, below 1e-15 of it
+/// (`|y''| <= (ω H)² |y|`-sized over a stretch with `ω H <= 0.25`).
+const PEAK_TOL: f64 = 1e-7;
+
 /// Critical points of a peak's polynomial looked at in one stretch (its
 /// derivative changes sign at most a few times over `ω H <= 0.25`).
 const MAX_CRITICAL_POINTS: usize = 8;
@@ -546,9 +551,10 @@ impl Simulator {
         // between two upper clusters a slip is quadratic in time and the
         // cubic through the ends is exact.
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
-        raise_peak_exact(&mut peak_u0, &flow.u, [u0, flow.u_spread], s, tol)?;
+        let peak_tol = tol.max(PEAK_TOL);
+        raise_peak_exact(&mut peak_u0, &flow.u, [u0, flow.u_spread], s, peak_tol)?;
         let a_ends = [accel_end, flow.accel_spread];
-        raise_peak_exact(&mut peak_a0, &flow.accel, a_ends, s, tol)?;
+        raise_peak_exact(&mut peak_a0, &flow.accel, a_ends, s, peak_tol)?;
         let mut peak_slip = self.peak_slip;
         let (mut du, mut v_end) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
         let mut upper_work = 0.0;
@@ -587,7 +593,7 @@ impl Simulator {
                         c[k + 1] += upper[k];
                     }
                     let slip = Poly::new(c, flow.u.deg.max(3));
-                    raise_peak_exact(&mut peak_slip[j], &slip, [slip1, spread], s, tol)?;
+                    raise_peak_exact(&mut peak_slip[j], &slip, [slip1, spread], s, peak_tol)?;
                 }
             } else {
                 let (vrel0, vrel1) = (self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]);
