@@ -299,14 +299,18 @@ struct Flow {
     h: f64,
     u: Poly,
     v: Poly,
-    accel: Poly,
-    /// `spread(1)` of `u`, `v` and `accel`: how far each can move from its
-    /// start over the stretch.
+    /// `spread(1)` of `u` and `v`: how far each can move from its start
+    /// over the stretch.
     u_spread: f64,
     v_spread: f64,
-    accel_spread: f64,
-    /// The absolute acceleration as `a0 + a1 τ - w2 u - cm v`.
+    /// The absolute acceleration as `a0 + a1 τ - w2 u - cm v`, its start
+    /// and a bound of how far it can move from it (from the spreads).
     accel_linear: [f64; 2],
+    accel_start: f64,
+    accel_spread_bound: f64,
+    /// Its polynomial and exact spread, built only where that bound does
+    /// not decide (most stretches need neither).
+    accel: std::cell::OnceCell<(Poly, f64)>,
     w2: f64,
     cm: f64,
     ag0: f64,
@@ -333,7 +337,7 @@ impl Flow {
         let p1 = exc.fext_rate * inv_mass - exc.ag_rate;
         // Taylor terms (A h)^k z / k!: their u and v parts are the
         // coefficients in s.
-        let (u, v, accel) = (&mut self.u.c, &mut self.v.c, &mut self.accel.c);
+        let (u, v) = (&mut self.u.c, &mut self.v.c);
         let mut y = [sim.u[0], sim.v[0], p0, p1];
         (u[0], v[0]) = (y[0], y[1]);
         let terms = u[1..=deg].iter_mut().zip(&mut v[1..=deg]).zip(&INV[..deg]);
@@ -342,19 +346,34 @@ impl Flow {
             y = [f * y[1], f * (y[2] - w2 * y[0] - cm * y[1]), f * y[3], 0.0];
             (*uk, *vk) = (y[0], y[1]);
         }
-        // A0 = p - w2 u - cm v + ag.
-        for ((a, uk), vk) in accel[..=deg].iter_mut().zip(&u[..=deg]).zip(&v[..=deg]) {
-            *a = -w2 * uk - cm * vk;
-        }
-        accel[0] += p0 + ag0;
-        accel[1] += (p1 + exc.ag_rate) * h;
-        (self.u.deg, self.v.deg, self.accel.deg) = (deg, deg, deg);
+        (self.u.deg, self.v.deg) = (deg, deg);
         self.u_spread = self.u.spread(1.0);
         self.v_spread = self.v.spread(1.0);
-        self.accel_spread = self.accel.spread(1.0);
         self.accel_linear = [p0 + ag0, p1 + exc.ag_rate];
+        self.accel_start = p0 + ag0 - w2 * sim.u[0] - cm * sim.v[0];
+        self.accel_spread_bound =
+            (self.accel_linear[1] * h).abs() + w2 * self.u_spread + cm * self.v_spread;
+        self.accel = std::cell::OnceCell::new();
         (self.h, self.w2, self.cm, self.ag0, self.ag_rate) = (h, w2, cm, ag0, exc.ag_rate);
         (self.q0, self.p1) = (q0, p1);
+    }
+
+    /// The absolute acceleration `p - w2 u - cm v + ag` as a polynomial, and
+    /// its spread.
+    fn accel(&self) -> &(Poly, f64) {
+        self.accel.get_or_init(|| {
+            let mut c = [0.0; N_COEF];
+            let (u, v) = (self.u.coefs(), self.v.coefs());
+            for ((a, uk), vk) in c.iter_mut().zip(u).zip(v) {
+                *a = -self.w2 * uk - self.cm * vk;
+            }
+            let [a0, a1] = self.accel_linear;
+            c[0] += a0;
+            c[1] += a1 * self.h;
+            let p = Poly::new(c, self.u.deg);
+            let spread = p.spread(1.0);
+            (p, spread)
+        })
     }
 
     /// Velocity of cluster `c` (relative to the support) as a polynomial.
@@ -406,10 +425,14 @@ impl Flow {
                 // cap - |mass_above A0 + f_top| >= 0: A0 within [lo, hi].
                 let lo = (-cap - f_top) / mass_above;
                 let hi = (cap - f_top) / mass_above;
-                let (a0, spread) = (self.accel.c[0], self.accel_spread);
+                let (a0, bound) = (self.accel_start, self.accel_spread_bound);
+                if a0 - bound > lo && a0 + bound < hi {
+                    return [None, None];
+                }
+                let (accel, spread) = self.accel();
                 [
-                    (a0 - spread <= lo).then(|| self.accel.affine(1.0, -lo)),
-                    (a0 + spread >= hi).then(|| self.accel.affine(-1.0, hi)),
+                    (a0 - spread <= lo).then(|| accel.affine(1.0, -lo)),
+                    (a0 + spread >= hi).then(|| accel.affine(-1.0, hi)),
                 ]
             }
         }
@@ -553,8 +576,12 @@ impl Simulator {
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let peak_tol = tol.max(PEAK_TOL);
         raise_peak_exact(&mut peak_u0, &flow.u, [u0, flow.u_spread], s, peak_tol)?;
-        let a_ends = [accel_end, flow.accel_spread];
-        raise_peak_exact(&mut peak_a0, &flow.accel, a_ends, s, peak_tol)?;
+        let a_start = flow.accel_start;
+        peak_a0 = peak_a0.max(a_start.abs()).max(accel_end.abs());
+        if a_start.abs() + flow.accel_spread_bound > peak_a0 {
+            let (accel, spread) = flow.accel();
+            raise_peak_exact(&mut peak_a0, accel, [accel_end, *spread], s, peak_tol)?;
+        }
         let mut peak_slip = self.peak_slip;
         let (mut du, mut v_end) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
         let mut upper_work = 0.0;
