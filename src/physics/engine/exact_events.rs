@@ -163,17 +163,18 @@ fn stays_positive([g0, d0, g1, d1]: [f64; 4], l: f64, m2: f64) -> bool {
 }
 
 /// The first zero of `g` in `(a, e]`, where `g(a) = ga >= 0` with rate `da`
-/// (`ga = 0` only for a guard that grows from a zero): `None` when `g > 0`
+/// (`ga = 0` only for a guard that grows from a zero), and `|g''|`, `|g'''|`
+/// are at most `m2`, `m3` over [0, 1] (`Poly::bounds`): `None` when `g > 0`
 /// over `(a, e]` is proved. `tol` is the width below which a stretch is
 /// not split further: a sign change there is the zero, and a dip below zero
 /// and back inside it is not seen (a graze).
-pub(super) fn first_zero(
+fn first_zero(
     g: &Poly,
+    [m2, m3]: [f64; 2],
     [mut a, mut ga, mut da]: [f64; 3],
     e: f64,
     tol: f64,
 ) -> Result<Option<f64>, Undecided> {
-    let [m2, m3] = g.bounds();
     let mut width = e - a;
     let mut evaluations = 0;
     while a < e {
@@ -256,11 +257,12 @@ fn raise_peak_exact(
         return Ok(());
     }
     let dy = y.derivative();
-    if dy.c[0].abs() > dy.spread(e) {
+    let dy_spread = dy.spread(e);
+    if dy.c[0].abs() > dy_spread {
         return Ok(()); // y' keeps its sign: the ends decide
     }
     // The sign of y' just after 0 (y' may start at zero).
-    let scale: f64 = dy.coefs().iter().map(|x| x.abs()).sum();
+    let scale = dy.c[0].abs() + dy_spread;
     let Some(&lead) = dy.coefs().iter().find(|x| x.abs() > 1e-12 * scale) else {
         return Ok(()); // y is constant
     };
@@ -274,7 +276,8 @@ fn raise_peak_exact(
         .flatten();
     let start = past.as_ref().unwrap_or(&g);
     let (g0, d0) = start.eval_d(0.0);
-    let mut zero = first_zero(start, [0.0, g0.max(0.0), d0], e, tol)?;
+    let mut zero = first_zero(start, start.bounds(), [0.0, g0.max(0.0), d0], e, tol)?;
+    let bounds = g.bounds(); // the same for either sign
     for _ in 0..MAX_CRITICAL_POINTS {
         let Some(r) = zero else {
             return Ok(());
@@ -286,7 +289,7 @@ fn raise_peak_exact(
         // The next sign change of y', from the other side.
         g.negate();
         let (ga, da) = g.eval_d(r);
-        zero = first_zero(&g, [r, ga.max(0.0), da], e, tol)?;
+        zero = first_zero(&g, bounds, [r, ga.max(0.0), da], e, tol)?;
     }
     Err(Undecided)
 }
@@ -541,7 +544,8 @@ impl Simulator {
                 let (g0, d0) = poly.eval_d(0.0);
                 // Only zeros before the earliest one found so far matter.
                 let end = earliest.map_or(1.0, |(s, _)| s);
-                if let Some(s) = first_zero(poly, [0.0, g0.max(0.0), d0], end, tol)? {
+                let start = [0.0, g0.max(0.0), d0];
+                if let Some(s) = first_zero(poly, poly.bounds(), start, end, tol)? {
                     if earliest.is_none_or(|(e, _)| s < e) {
                         earliest = Some((s, j));
                     }
@@ -739,7 +743,7 @@ mod tests {
 
     fn first_zero_from_start(g: &Poly) -> Option<f64> {
         let (g0, d0) = g.eval_d(0.0);
-        first_zero(g, [0.0, g0, d0], 1.0, 1e-13).unwrap()
+        first_zero(g, g.bounds(), [0.0, g0, d0], 1.0, 1e-13).unwrap()
     }
 
     #[test]
@@ -774,7 +778,7 @@ mod tests {
         hover.c[0] += 1e-18;
         let (g0, d0) = hover.eval_d(0.0);
         assert_eq!(
-            first_zero(&hover, [0.0, g0, d0], 1.0, 1e-13),
+            first_zero(&hover, hover.bounds(), [0.0, g0, d0], 1.0, 1e-13),
             Err(Undecided)
         );
     }
