@@ -32,8 +32,10 @@ fn main() {
         .unwrap_or(if smoke { 1 } else { 41 });
     let reps = if smoke { 1 } else { 20 };
 
-    let mut one = Params::default();
-    one.n_blocks = 1;
+    let one = Params {
+        n_blocks: 1,
+        ..Params::default()
+    };
     let mut rigid = one.clone();
     rigid.mus[0] = 10.0;
     rigid.muk[0] = 10.0;
