@@ -1,4 +1,5 @@
 //! Times one 20 s simulation (for profiling; the figures are `cargo bench`'s).
+//! `cargo run --release --example speed -- N`; `RIGID=1` keeps block 1 stuck.
 use stacked_live_load::ground::{record, synthetic};
 use stacked_live_load::physics::sdof;
 use stacked_live_load::*;
@@ -9,6 +10,12 @@ fn main() {
         .unwrap_or(2);
     let mut p = Params::default();
     p.n_blocks = n;
+    // RIGID=1: the lowest block never slides (mu 10), to price a switch
+    // against the same run with it sliding (as the frontier bench does).
+    if std::env::var("RIGID").is_ok_and(|v| v == "1") {
+        p.mus[0] = 10.0;
+        p.muk[0] = 10.0;
+    }
     // RECORD=path: a record file instead of the embedded default (first 20 s).
     let gm = match std::env::var("RECORD") {
         Ok(path) => {

@@ -1,8 +1,9 @@
 //! Time integration of the reduced system of the current mode: by default
 //! the exact map of each substep (RK4 folded to round-off) wherever a substep
-//! is proved free of switches and new peaks, and RK4 with stick/slip events
-//! located inside the step elsewhere (or, as a baseline, checked at step ends
-//! only); running peaks and the energy balance.
+//! is proved free of switches and new peaks, and elsewhere the exact motion
+//! with stick/slip events located on its Taylor polynomials; with a positive
+//! `maxStep`, RK4 with events located inside the step (or, as a baseline,
+//! checked at step ends only); running peaks and the energy balance.
 //!
 //! The state is kept per body (`u`, `v` relative to the support); a step
 //! packs one displacement and one velocity per cluster plus the energy
@@ -12,7 +13,8 @@
 //! This file holds the [`Simulator`] and its stepping loop; beside it:
 //! `pieces` (excitation pieces, step sizes), `exact_map` and `folded` (the
 //! default: substeps on the exact map, proved event- and peak-free), `samples`
-//! (the same over a record's samples read directly), `lean`
+//! (the same over a record's samples read directly), `exact_events` (the
+//! default's other substeps: events on the exact motion), `lean`
 //! and `rk4_map` (the RK4 fast path of switch-free steps), `structure_rk4`
 //! (one RK4 step of the clusters), `events` (guards, location, resolution),
 //! `report` (outputs, counters, errors), `saved_state` and `state_check`
@@ -25,6 +27,7 @@ use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::physics::system::System;
 
 mod events;
+mod exact_events;
 mod exact_map;
 mod folded;
 mod lean;
@@ -54,7 +57,8 @@ pub struct Simulator {
     settings: Settings,
     h_max: f64,
     /// The default method (automatic step, located events): substeps on the
-    /// exact map, fine RK4 steps where it cannot prove a substep event-free.
+    /// exact map, the exact motion with located events where it cannot prove
+    /// a substep event-free (fine RK4 steps only if that cannot decide).
     exact: bool,
     h_fine: f64,
     /// Exact maps in use (derived data only: rebuilt identically on demand).
@@ -147,6 +151,9 @@ impl Simulator {
                 };
             }
         }
+        // The resolution rebuilds the dynamics only when it changes the
+        // mode: the slips set here must have theirs already.
+        self.dynamics = Dynamics::new(&self.sys, &self.mode);
         self.resolve_mode(0);
         self.peak_u0 = self.u[0].abs();
         self.peak_slip = [0.0; MAX_BODIES];
@@ -242,12 +249,13 @@ impl Simulator {
             match self.settings.method {
                 Method::EventLocated if self.exact => loop {
                     // Substeps proved event-free on the exact map; the one
-                    // it cannot prove at fine RK4 steps with located events.
+                    // it cannot prove on the exact motion with events
+                    // located on it.
                     pending = self.folded_steps(&mut piece, &mut pieces);
                     if piece.i > piece.n {
                         break;
                     }
-                    self.fine_steps(piece.end_of(piece.i), &piece);
+                    self.exact_substep(piece.end_of(piece.i), &piece);
                     piece.i += 1;
                 },
                 Method::EventLocated => loop {

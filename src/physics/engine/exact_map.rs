@@ -29,7 +29,7 @@ const TERMS: usize = MAX_DEGREE + 6;
 /// Degree at which the Taylor terms of `exp(A h)` fall below 1e-20: they
 /// shrink as `ρ^k / k!` with `ρ = h max(ω + c/m, 1)` (the oscillator's rate
 /// and the forcing's polynomial part).
-fn degree(h: f64, w2: f64, cm: f64) -> usize {
+pub(super) fn degree(h: f64, w2: f64, cm: f64) -> usize {
     let rho = h * (w2.sqrt() + cm).max(1.0);
     let mut term = 1.0;
     for k in 1..=MAX_DEGREE {

@@ -108,10 +108,10 @@ pub const STABLE_H_OMEGA: f64 = 2.5;
 pub const ACCURATE_H_OMEGA: f64 = 0.02;
 /// See [`ACCURATE_H_OMEGA`].
 pub const ACCURATE_MAX_STEP: f64 = 0.00125;
-/// The default method's RK4 step inside the substeps the exact map cannot
-/// take (those holding an event or a new interior peak): `h ω_p <= 0.005`
-/// and `h <= 0.3125 ms`, a quarter of the former automatic step, so that
-/// these few substeps stay below 1e-9 of the peaks (docs/accuracy-speed.md, "Accuracy").
+/// The default method's RK4 step where the exact event path
+/// (`exact_events`) cannot decide a substep within its budget (a guard
+/// hovering at rounding level): `h ω_p <= 0.01` and `h <= 0.625 ms`, so
+/// that such a substep stays below 1e-9 of the peaks (docs/accuracy-speed.md, "Accuracy").
 pub const FINE_H_OMEGA: f64 = 0.01;
 /// See [`FINE_H_OMEGA`].
 pub const FINE_MAX_STEP: f64 = 0.000625;
