@@ -285,7 +285,15 @@ impl Simulator {
                 // Stuck interfaces: the absolute acceleration stays in the band.
                 if has_band {
                     let (low, high) = if a_abs < a1 { (a_abs, a1) } else { (a1, a_abs) };
-                    if !(low - sag > band_lo && high + sag < band_hi) {
+                    let inside = (low - sag > band_lo && high + sag < band_hi) || {
+                        // Near an edge: Taylor's bounds from both ends, with
+                        // the rates A' = -w2 v - cm (A - ag).
+                        let j0 = -w2 * vel[0] - cm * (a_abs - a_s);
+                        let j1 = -w2 * v1 - cm * (a1 - a_e);
+                        stays_positive([a_abs - band_lo, j0, a1 - band_lo, j1], h, s3)
+                            && stays_positive([band_hi - a_abs, -j0, band_hi - a1, -j1], h, s3)
+                    };
+                    if !inside {
                         stop = Stop { k, sub };
                         break 'samples;
                     }
