@@ -379,7 +379,9 @@ impl Simulator {
                         break 'samples;
                     }
                 }
-                // Slips: slip''' = -(ag' + v0''), slip'''' = -v0''' at the
+                // Slips. One whose guard was proved above keeps its
+                // direction: it peaks at an end. Otherwise (a free
+                // interface) slip''' = -(ag' + v0''), slip'''' = -v0''' at the
                 // structure; a quadratic in time between upper clusters.
                 let mut new_slip = slip;
                 for m in 0..NC - 1 {
@@ -387,7 +389,13 @@ impl Simulator {
                     let (vr0, vr1) = (vel[m + 1] - vel[m], v_end[m + 1] - v_end[m]);
                     new_slip[m] = slip[m] + increment;
                     let ends = [slip[m], vr0, new_slip[m], vr1];
-                    if m == 0 {
+                    if slip_sign[m] != 0.0 {
+                        let (e0, e1) = (slip[m].abs(), new_slip[m].abs());
+                        let end = if e0 > e1 { e0 } else { e1 };
+                        if end > peak_slip[m] {
+                            peak_slip[m] = end;
+                        }
+                    } else if m == 0 {
                         let third = s2 + ag_rate.abs();
                         if !raise_peak_proved(&mut peak_slip[m], ends, h, s3, || third) {
                             stop = Stop { k, sub };
