@@ -5,7 +5,7 @@
 //! a substep length that differs from its map's by rounding, and for the
 //! exact energy forms. Here whole sample intervals of a uniform record
 //! (`dt` the record's spacing, `n` equal substeps per sample so that
-//! `ω dt / n <= 0.25`) go through a loop that reads the samples directly
+//! `ω dt / n <= 0.5`) go through a loop that reads the samples directly
 //! and does only the quick tests of `folded.rs`: a substep is taken when
 //! its guards and peaks are proved from its ends and `h²/8 sup|y''|`
 //! (or, for a peak, the rate test of `folded::raise_peak_proved`), and
