@@ -15,7 +15,7 @@
 //! forms, and the upper clusters' input work in closed form per run.
 
 use super::exact_events::raise_substep_peaks;
-use super::exact_map::{degree, dot, ExactMap};
+use super::exact_map::{dot, ExactMap};
 use super::folded::{raise_peak_proved, stays_positive};
 use super::lean::safe_accel_band;
 use super::{move_bodies, Excitation, SimError, Simulator};
@@ -256,7 +256,7 @@ impl Simulator {
         let (w2, cm, inv_h, h2_8) = (map.w2, map.cm, 1.0 / h, 0.125 * h * h);
         let inv_n = 1.0 / n_sub as f64;
         // Degree of the Taylor polynomials of a substep (exact peaks).
-        let degree = degree(h, w2, cm);
+        let degree = map.degree;
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
         let dv_c = accel_c.map(|a| h * a);
         let du_c = accel_c.map(|a| 0.5 * h * h * a);
