@@ -294,6 +294,50 @@ fn raise_peak_exact(
     Err(Undecided)
 }
 
+/// `u` and `v` of the structure's cluster over a stretch of length `h` from
+/// `z = [u, v, p, p']` as polynomials of degree `deg` in `s = τ / h`: the
+/// Taylor terms `(A h)^k z / k!`, whose u and v parts are the coefficients.
+fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, [u, v]: [&mut Poly; 2]) {
+    let mut y = z;
+    (u.c[0], v.c[0]) = (y[0], y[1]);
+    let terms = u.c[1..=deg]
+        .iter_mut()
+        .zip(&mut v.c[1..=deg])
+        .zip(&INV[..deg]);
+    for ((uk, vk), inv) in terms {
+        let f = h * inv;
+        y = [f * y[1], f * (y[2] - w2 * y[0] - cm * y[1]), f * y[3], 0.0];
+        (*uk, *vk) = (y[0], y[1]);
+    }
+    (u.deg, v.deg) = (deg, deg);
+}
+
+/// For the sample loop (`samples.rs`), over one whole substep from `z`
+/// where its bounds could not exclude a new interior peak: raises `peak_u`
+/// to the largest `|u|` and `peak_a` to the largest absolute acceleration
+/// `cf - w2 u - cm v` (held inputs), exactly, on the Taylor polynomials;
+/// `ends` are u and the acceleration at the substep's end.
+#[inline(never)]
+pub(super) fn raise_substep_peaks(
+    [peak_u, peak_a]: [&mut f64; 2],
+    z: [f64; 4],
+    h: f64,
+    [w2, cm, cf]: [f64; 3],
+    deg: usize,
+    [u_end, a_end]: [f64; 2],
+) -> Result<(), Undecided> {
+    let (mut u, mut v) = (Poly::default(), Poly::default());
+    taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
+    let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
+    raise_peak_exact(peak_u, &u, [u_end, u.spread(1.0)], 1.0, tol)?;
+    let mut a = u;
+    for (ak, vk) in a.c[..=deg].iter_mut().zip(&v.c) {
+        *ak = -w2 * *ak - cm * vk;
+    }
+    a.c[0] += cf;
+    raise_peak_exact(peak_a, &a, [a_end, a.spread(1.0)], 1.0, tol)
+}
+
 /// The structure's cluster over the rest of a substep, of length `h`, from
 /// the current state in the current mode: `u`, `v` and the absolute
 /// acceleration as polynomials in `s = τ / h`.
@@ -338,18 +382,13 @@ impl Flow {
         let q0 = fext0 * inv_mass - ag0;
         let p0 = d.slip_load[0] * inv_mass + q0;
         let p1 = exc.fext_rate * inv_mass - exc.ag_rate;
-        // Taylor terms (A h)^k z / k!: their u and v parts are the
-        // coefficients in s.
-        let (u, v) = (&mut self.u.c, &mut self.v.c);
-        let mut y = [sim.u[0], sim.v[0], p0, p1];
-        (u[0], v[0]) = (y[0], y[1]);
-        let terms = u[1..=deg].iter_mut().zip(&mut v[1..=deg]).zip(&INV[..deg]);
-        for ((uk, vk), inv) in terms {
-            let f = h * inv;
-            y = [f * y[1], f * (y[2] - w2 * y[0] - cm * y[1]), f * y[3], 0.0];
-            (*uk, *vk) = (y[0], y[1]);
-        }
-        (self.u.deg, self.v.deg) = (deg, deg);
+        taylor_uv(
+            [sim.u[0], sim.v[0], p0, p1],
+            h,
+            [w2, cm],
+            deg,
+            [&mut self.u, &mut self.v],
+        );
         self.u_spread = self.u.spread(1.0);
         self.v_spread = self.v.spread(1.0);
         self.accel_linear = [p0 + ag0, p1 + exc.ag_rate];

@@ -8,8 +8,8 @@
 //! time. `n` RK4 substeps of `h / n` compose into the matrix
 //! `T4(A h / n)^n` (`T4` the degree-4 Taylor polynomial), which tends to
 //! `exp(A h)` as `n` grows; we take that limit directly, as the Taylor sum of
-//! `exp(A h)` to degree [`DEGREE`] (the substep keeps `ω h <= 0.25`, where the
-//! sum's terms fall below 1e-30 of the first by then). A substep is then one
+//! `exp(A h)` to degree [`DEGREE`] (the substep keeps `ω h <= 0.5`, where the
+//! sum stops where its terms fall below 1e-20, by degree 18). A substep is then one
 //! small matrix-vector product whatever the accuracy asked.
 //!
 //! From the same Taylor terms, per mode and substep length: the integral of
@@ -25,6 +25,16 @@ use crate::physics::system::System;
 const MAX_DEGREE: usize = 20;
 /// Extra terms kept for the derivative bounds (up to `v^(5)`).
 const TERMS: usize = MAX_DEGREE + 6;
+/// `1 / (n + 1)`, for the weights of `∫ v²`.
+const RECIPROCALS: [f64; 2 * TERMS + 2] = {
+    let mut r = [0.0; 2 * TERMS + 2];
+    let mut n = 0;
+    while n < r.len() {
+        r[n] = 1.0 / (n + 1) as f64;
+        n += 1;
+    }
+    r
+};
 
 /// Degree at which the Taylor terms of `exp(A h)` fall below 1e-20: they
 /// shrink as `ρ^k / k!` with `ρ = h max(ω + c/m, 1)` (the oscillator's rate
@@ -42,7 +52,7 @@ pub(super) fn degree(h: f64, w2: f64, cm: f64) -> usize {
 }
 /// Largest `ω h` of a substep on the exact map (ω of the bare structure, the
 /// highest of every mode).
-pub(super) const MAP_H_OMEGA: f64 = 0.25;
+pub(super) const MAP_H_OMEGA: f64 = 0.5;
 
 /// Rounds `h` to 30 significant bits. Maps are built for the rounded length
 /// and the rest (at most 1e-9 relative) carried to first order, so that the
@@ -61,6 +71,8 @@ pub(super) struct ExactMap {
     /// The cluster's mass and the substep length it was built for.
     pub(super) mass: f64,
     pub(super) h: f64,
+    /// Degree of its Taylor sum ([`degree`]).
+    pub(super) degree: usize,
     /// Rows over `z = [u, v, p, p']`: u and v at the end, and `∫ u dτ`.
     pub(super) u: [f64; 4],
     pub(super) v: [f64; 4],
@@ -87,50 +99,41 @@ impl ExactMap {
     /// canonical).
     pub(super) fn new(sys: &System, mass: f64, h: f64) -> ExactMap {
         let (w2, cm) = (sys.k / mass, sys.c / mass);
-        // A h, and the Taylor terms T_k = (A h)^k / k!.
-        let a = [
-            [0.0, h, 0.0, 0.0],
-            [-w2 * h, -cm * h, h, 0.0],
-            [0.0, 0.0, 0.0, h],
-            [0.0; 4],
-        ];
+        // Rows u and v of the Taylor terms T_k = (A h)^k / k!: from
+        // T_k = T_(k-1) A h / k, a row x goes to x A h / k, where
+        // x A = [-w2 x1, x0 - cm x1, x1, x2] (A is sparse).
         let degree = degree(h, w2, cm);
         let n_terms = degree + 6;
-        let mut terms = [[[0.0; 4]; 4]; TERMS + 1];
-        terms[0] = [
-            [1.0, 0.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ];
+        let mut rows = [[[0.0; 4]; 2]; TERMS + 1];
+        rows[0] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
         for k in 1..=n_terms {
-            let prev = terms[k - 1];
-            for r in 0..4 {
-                for col in 0..4 {
-                    let s: f64 = (0..4).map(|i| a[r][i] * prev[i][col]).sum();
-                    terms[k][r][col] = s / k as f64;
-                }
-            }
+            let f = h / k as f64;
+            rows[k] =
+                rows[k - 1].map(|x| [-w2 * x[1] * f, (x[0] - cm * x[1]) * f, x[1] * f, x[2] * f]);
         }
         let (mut u, mut v, mut int_u) = ([0.0; 4], [0.0; 4], [0.0; 4]);
         // Sum the small terms first.
         for k in (0..=degree).rev() {
             for i in 0..4 {
-                u[i] += terms[k][0][i];
-                v[i] += terms[k][1][i];
-                int_u[i] += h * terms[k][0][i] / (k + 1) as f64;
+                u[i] += rows[k][0][i];
+                v[i] += rows[k][1][i];
+                int_u[i] += h * rows[k][0][i] / (k + 1) as f64;
             }
         }
         // v(τ) = Σ_k r_k z (τ/h)^k with r_k the v row of T_k, so
-        // ∫_0^h v² = h Σ_ij (r_i z)(r_j z) / (i + j + 1).
+        // ∫_0^h v² = h Σ_ij (r_i z)(r_j z) / (i + j + 1): the inner sums
+        // over j first, w[i] = Σ_j r_j / (i + j + 1).
         let mut q = [[0.0; 4]; 4];
         for i in (0..=degree).rev() {
+            let mut w = [0.0; 4];
             for j in (0..=degree).rev() {
-                let w = h / (i + j + 1) as f64;
-                for r in 0..4 {
-                    for s in r..4 {
-                        q[r][s] += w * terms[i][1][r] * terms[j][1][s];
-                    }
+                for (ws, r) in w.iter_mut().zip(rows[j][1]) {
+                    *ws += r * RECIPROCALS[i + j];
+                }
+            }
+            for r in 0..4 {
+                for s in r..4 {
+                    q[r][s] += h * rows[i][1][r] * w[s];
                 }
             }
         }
@@ -156,7 +159,7 @@ impl ExactMap {
             for k in (0..=n_terms - m).rev() {
                 let falling: f64 = ((k + 1)..=(k + m)).map(|x| x as f64).product();
                 for i in 0..4 {
-                    b[i] += terms[m + k][1][i].abs() * falling;
+                    b[i] += rows[m + k][1][i].abs() * falling;
                 }
             }
             let scale = (1.0 + 1e-6) / h.powi(m as i32);
@@ -171,6 +174,7 @@ impl ExactMap {
         };
         let (five_over_three, one_over_three) = (over_three(5), over_three(1));
         ExactMap {
+            degree,
             five_over_three,
             one_over_three,
             mass,

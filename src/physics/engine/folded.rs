@@ -1,7 +1,7 @@
 //! The default method's fast path: whole substeps on the exact map.
 //!
 //! With the automatic step (`maxStep = 0`), a substep of a record's piece
-//! (one substep per sample unless `ω dt > 0.25`) is taken in one product
+//! (one substep per sample unless `ω dt > 0.5`) is taken in one product
 //! with the structure cluster's exact map ([`ExactMap`]); the upper
 //! clusters move as their exact polynomials, as on every path. A substep is
 //! taken here only when it is *proved* that nothing happens inside it:

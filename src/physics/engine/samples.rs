@@ -5,7 +5,7 @@
 //! a substep length that differs from its map's by rounding, and for the
 //! exact energy forms. Here whole sample intervals of a uniform record
 //! (`dt` the record's spacing, `n` equal substeps per sample so that
-//! `ω dt / n <= 0.25`) go through a loop that reads the samples directly
+//! `ω dt / n <= 0.5`) go through a loop that reads the samples directly
 //! and does only the quick tests of `folded.rs`: a substep is taken when
 //! its guards and peaks are proved from its ends and `h²/8 sup|y''|`
 //! (or, for a peak, the rate test of `folded::raise_peak_proved`), and
@@ -14,6 +14,7 @@
 //! the same map, the structure's input and viscous work from the same
 //! forms, and the upper clusters' input work in closed form per run.
 
+use super::exact_events::raise_substep_peaks;
 use super::exact_map::{dot, ExactMap};
 use super::folded::{raise_peak_proved, stays_positive};
 use super::lean::safe_accel_band;
@@ -165,15 +166,28 @@ impl Simulator {
             if stop.k >= last {
                 break;
             }
-            // The general path takes the rest of that sample interval.
+            // The event path takes the rest of that sample interval.
             let (t1, exc) = s.piece(stop.k, self.t);
-            self.advance_pieces(std::iter::once((t1, exc)))?;
+            self.exact_interval(t1, &exc)?;
             k = stop.k + 1;
         }
         self.t = s.time[last];
         self.ag_now = s.ag(last);
         self.fext_now = s.fext;
         self.check_finite()
+    }
+
+    /// From now to `t1` (the rest of a sample interval the loop could not
+    /// take) on the event path directly: the fast path's proofs are the
+    /// loop's, and would fail there too.
+    fn exact_interval(&mut self, t1: f64, exc: &Excitation) -> Result<(), SimError> {
+        let mut piece = self.begin_piece(t1, exc)?;
+        while piece.i <= piece.n {
+            self.exact_substep(piece.end_of(piece.i), &piece);
+            piece.i += 1;
+        }
+        self.end_piece(&piece);
+        Ok(())
     }
 
     fn sample_run(&mut self, s: &Samples<'_>, k: usize, last: usize, n_sub: usize) -> Stop {
@@ -241,6 +255,8 @@ impl Simulator {
         let cf = d.slip_load[0] * d.inv_mass0 + fm;
         let (w2, cm, inv_h, h2_8) = (map.w2, map.cm, 1.0 / h, 0.125 * h * h);
         let inv_n = 1.0 / n_sub as f64;
+        // Degree of the Taylor polynomials of a substep (exact peaks).
+        let degree = map.degree;
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
         let dv_c = accel_c.map(|a| h * a);
         let du_c = accel_c.map(|a| 0.5 * h * h * a);
@@ -335,32 +351,37 @@ impl Simulator {
                         break 'samples;
                     }
                 }
-                // Peaks of |u0| and |A0| (u'' = v', A'' = v''').
+                // Peaks of |u0| and |A0| (u'' = v', A'' = v'''); where the
+                // bounds cannot exclude a new one inside, on the polynomials.
                 let (e0, e1) = (u0.abs(), u1.abs());
                 let ends = if e0 > e1 { e0 } else { e1 };
-                if ends + sag * map.one_over_three > peak_u0
-                    && !raise_peak_proved(&mut peak_u0, [u0, vel[0], u1, v1], h, s3, || {
+                let u_proved = ends + sag * map.one_over_three <= peak_u0
+                    || raise_peak_proved(&mut peak_u0, [u0, vel[0], u1, v1], h, s3, || {
                         map.sup_v(2, &z)
-                    })
-                {
-                    stop = Stop { k, sub };
-                    break 'samples;
-                }
+                    });
                 let (e0, e1) = (a_abs.abs(), a1.abs());
                 let ends = if e0 > e1 { e0 } else { e1 };
-                if ends + sag > peak_a0 {
-                    // Rates: A' = -w2 v - cm (A - ag) (no slope of Fext here).
-                    let j0 = -w2 * vel[0] - cm * (a_abs - a_s);
-                    let j1 = -w2 * v1 - cm * (a1 - a_e);
-                    let fifth = map.five_over_three * s3;
-                    if !raise_peak_proved(&mut peak_a0, [a_abs, j0, a1, j1], h, fifth, || {
-                        map.sup_v(4, &z)
-                    }) {
+                let a_proved = u_proved
+                    && (ends + sag <= peak_a0 || {
+                        // Rates: A' = -w2 v - cm (A - ag) (no slope of Fext here).
+                        let j0 = -w2 * vel[0] - cm * (a_abs - a_s);
+                        let j1 = -w2 * v1 - cm * (a1 - a_e);
+                        let fifth = map.five_over_three * s3;
+                        raise_peak_proved(&mut peak_a0, [a_abs, j0, a1, j1], h, fifth, || {
+                            map.sup_v(4, &z)
+                        })
+                    });
+                if !a_proved {
+                    let peaks = [&mut peak_u0, &mut peak_a0];
+                    let rates = [w2, cm, cf];
+                    if raise_substep_peaks(peaks, z, h, rates, degree, [u1, a1]).is_err() {
                         stop = Stop { k, sub };
                         break 'samples;
                     }
                 }
-                // Slips: slip''' = -(ag' + v0''), slip'''' = -v0''' at the
+                // Slips. One whose guard was proved above keeps its
+                // direction: it peaks at an end. Otherwise (a free
+                // interface) slip''' = -(ag' + v0''), slip'''' = -v0''' at the
                 // structure; a quadratic in time between upper clusters.
                 let mut new_slip = slip;
                 for m in 0..NC - 1 {
@@ -368,7 +389,13 @@ impl Simulator {
                     let (vr0, vr1) = (vel[m + 1] - vel[m], v_end[m + 1] - v_end[m]);
                     new_slip[m] = slip[m] + increment;
                     let ends = [slip[m], vr0, new_slip[m], vr1];
-                    if m == 0 {
+                    if slip_sign[m] != 0.0 {
+                        let (e0, e1) = (slip[m].abs(), new_slip[m].abs());
+                        let end = if e0 > e1 { e0 } else { e1 };
+                        if end > peak_slip[m] {
+                            peak_slip[m] = end;
+                        }
+                    } else if m == 0 {
                         let third = s2 + ag_rate.abs();
                         if !raise_peak_proved(&mut peak_slip[m], ends, h, s3, || third) {
                             stop = Stop { k, sub };
