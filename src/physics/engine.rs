@@ -32,6 +32,7 @@ mod exact_map;
 mod folded;
 mod lean;
 mod pieces;
+mod poly;
 mod report;
 mod rk4_map;
 mod samples;

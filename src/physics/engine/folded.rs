@@ -16,10 +16,10 @@
 //!   `h⁴/384 sup|y''''|`; a `y` proved monotone peaks at an end.
 //!
 //! A substep where either proof fails is handed back and taken by the
-//! general path at fine RK4 steps with located events (`Simulator::
-//! fine_steps`): every event, and the few substeps holding a new interior
-//! peak. The energy terms are exact: the viscous work a quadratic form, the
-//! input work bilinear in the state, `∫ u` and the inputs.
+//! event path on the exact motion (`exact_events.rs`): every event, and
+//! the few substeps holding a new interior peak. The energy terms are
+//! exact: the viscous work a quadratic form, the input work bilinear in the
+//! state, `∫ u` and the inputs.
 
 use super::exact_map::{canonical_length, dot, ExactMap, MAP_H_OMEGA};
 use super::lean::{safe_accel_band, UpperClusters};

@@ -6,13 +6,15 @@
 //! exact energy forms. Here whole sample intervals of a uniform record
 //! (`dt` the record's spacing, `n` equal substeps per sample so that
 //! `ω dt / n <= 0.5`) go through a loop that reads the samples directly
-//! and does only the quick tests of `folded.rs`: a substep is taken when
-//! its guards and peaks are proved from its ends and `h²/8 sup|y''|`
-//! (or, for a peak, the rate test of `folded::raise_peak_proved`), and
-//! handed to the general path otherwise (every switch, and the substeps
-//! the quick tests cannot decide). What is exact there is exact here:
-//! the same map, the structure's input and viscous work from the same
-//! forms, and the upper clusters' input work in closed form per run.
+//! and does the quick tests of `folded.rs`: a substep is taken when its
+//! guards are proved from its ends and `h²/8 sup|g''|` (or Taylor's bounds
+//! from both ends), and its peaks likewise or, where that fails, found
+//! exactly on its Taylor polynomials (`exact_events::raise_substep_peaks`).
+//! What the tests cannot decide (every switch) goes to the event path
+//! (`exact_events.rs`) for the rest of that sample interval. What is exact
+//! there is exact here: the same map, the structure's input and viscous
+//! work from the same forms (summed per run), and the upper clusters'
+//! input work in closed form per run.
 
 use super::exact_events::raise_substep_peaks;
 use super::exact_map::{dot, ExactMap};

@@ -1,0 +1,391 @@
+//! Polynomials of the exact motion over a stretch, `Σ c[k] s^k` on
+//! `s ∈ [0, 1]`: evaluation, bounds of their derivatives, the first zero of
+//! a guard with a proof that none comes before it ([`first_zero`]), the
+//! largest `|y|` over a stretch ([`raise_peak_exact`]), and the integrals
+//! the work terms need. Used by the event path (`exact_events.rs`) and, for
+//! peaks, by the sample loop (`samples.rs`).
+
+use super::folded::stays_positive;
+
+/// Coefficients of a polynomial (degree at most `exact_map`'s largest, plus
+/// the integral's one).
+pub(super) const N_COEF: usize = 24;
+
+/// Evaluations [`first_zero`] may spend on one guard before it gives up
+/// (a guard hovering at rounding level over the substep); the substep is
+/// then taken by fine RK4 steps (`Simulator::fine_steps`).
+const EVALUATION_BUDGET: u32 = 400;
+
+/// Width (fraction of a stretch) to which a peak's critical point is
+/// located: the peak is then within `sup|y''| δ² / 2`, below 1e-15 of it
+/// (`|y''| <= (ω H)² |y|`-sized over a stretch with `ω H <= 0.5`).
+pub(super) const PEAK_TOL: f64 = 1e-7;
+
+/// Critical points of a peak's polynomial looked at in one stretch (its
+/// derivative changes sign at most a few times over `ω H <= 0.5`).
+const MAX_CRITICAL_POINTS: usize = 8;
+
+/// A polynomial `Σ c[k] s^k` on `s ∈ [0, 1]`.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Poly {
+    pub(super) c: [f64; N_COEF],
+    pub(super) deg: usize,
+}
+
+impl Poly {
+    pub(super) fn new(c: [f64; N_COEF], deg: usize) -> Poly {
+        Poly { c, deg }
+    }
+
+    /// Bounds of `|p''|` and `|p'''|` over [0, 1] (triangle inequality; the
+    /// factor covers the rounding of the coefficients and of the sums).
+    pub(super) fn bounds(&self) -> [f64; 2] {
+        let (mut m2, mut m3) = (0.0, 0.0);
+        let mut kf = 2.0;
+        for c in self.c.iter().take(self.deg + 1).skip(2) {
+            let term = kf * (kf - 1.0) * c.abs();
+            m2 += term;
+            m3 += term * (kf - 2.0);
+            kf += 1.0;
+        }
+        [m2 * (1.0 + 1e-12), m3 * (1.0 + 1e-12)]
+    }
+
+    /// `Σ_(k >= 1) |c_k| s^k`: a bound of `|p(σ) - p(0)|` over `[0, s]`.
+    pub(super) fn spread(&self, s: f64) -> f64 {
+        let rest = &self.c[1..=self.deg];
+        rest.iter().rev().fold(0.0, |y, c| (y + c.abs()) * s)
+    }
+
+    pub(super) fn negate(&mut self) {
+        for c in &mut self.c[..=self.deg] {
+            *c = -*c;
+        }
+    }
+
+    /// `sign p + offset`.
+    pub(super) fn affine(&self, sign: f64, offset: f64) -> Poly {
+        let mut c = self.c.map(|x| sign * x);
+        c[0] += offset;
+        Poly::new(c, self.deg)
+    }
+
+    /// For a guard that is zero at `s = 0` up to rounding: `p / s^m`, `m`
+    /// its leading coefficients at rounding level (at most three), which has
+    /// the zeros of `p` in (0, 1]. `None` when the first coefficient left is
+    /// negative: the guard does not grow from its zero.
+    pub(super) fn past_zero_start(&self) -> Option<Poly> {
+        let scale: f64 = (1..=self.deg).map(|k| self.c[k].abs()).sum();
+        let m = (0..=self.deg.min(3)).find(|&k| self.c[k].abs() > 1e-12 * scale)?;
+        if self.c[m] < 0.0 {
+            return None;
+        }
+        let mut c = [0.0; N_COEF];
+        c[..=self.deg - m].copy_from_slice(&self.c[m..=self.deg]);
+        Some(Poly::new(c, self.deg - m))
+    }
+
+    pub(super) fn coefs(&self) -> &[f64] {
+        &self.c[..=self.deg]
+    }
+
+    #[inline]
+    pub(super) fn eval(&self, s: f64) -> f64 {
+        let (top, rest) = self.c[..=self.deg].split_last().unwrap();
+        rest.iter().rev().fold(*top, |y, c| y * s + c)
+    }
+
+    /// Value and derivative at `s`.
+    #[inline]
+    pub(super) fn eval_d(&self, s: f64) -> (f64, f64) {
+        let (top, rest) = self.c[..=self.deg].split_last().unwrap();
+        let (mut y, mut d) = (*top, 0.0);
+        for c in rest.iter().rev() {
+            d = d * s + y;
+            y = y * s + c;
+        }
+        (y, d)
+    }
+
+    pub(super) fn derivative(&self) -> Poly {
+        let mut c = [0.0; N_COEF];
+        for k in 1..=self.deg {
+            c[k - 1] = k as f64 * self.c[k];
+        }
+        Poly::new(c, self.deg.max(1) - 1)
+    }
+}
+
+/// Why a guard or a peak could not be decided within the budget.
+#[derive(Debug, PartialEq)]
+pub(super) struct Undecided;
+
+/// The first zero of `g` in `(a, e]`, where `g(a) = ga >= 0` with rate `da`
+/// (`ga = 0` only for a guard that grows from a zero), and `|g''|`, `|g'''|`
+/// are at most `m2`, `m3` over [0, 1] (`Poly::bounds`): `None` when `g > 0`
+/// over `(a, e]` is proved. `tol` is the width below which a stretch is
+/// not split further: a sign change there is the zero, and a dip below zero
+/// and back inside it is not seen (a graze).
+pub(super) fn first_zero(
+    g: &Poly,
+    [m2, m3]: [f64; 2],
+    [mut a, mut ga, mut da]: [f64; 3],
+    e: f64,
+    tol: f64,
+) -> Result<Option<f64>, Undecided> {
+    let mut width = e - a;
+    let mut evaluations = 0;
+    while a < e {
+        evaluations += 1;
+        if evaluations > EVALUATION_BUDGET {
+            return Err(Undecided);
+        }
+        let b = if a + width >= e { e } else { a + width };
+        let l = b - a;
+        let (gb, db) = g.eval_d(b);
+        if gb > 0.0 {
+            if l <= tol || stays_positive([ga, da, gb, db], l, m2) {
+                (a, ga, da) = (b, gb, db);
+                width = 2.0 * l;
+                continue;
+            }
+        } else {
+            // g' < 0 over the stretch (it stays within l²/8 sup|g'''| of its
+            // linear interpolation): a single crossing.
+            let falling = -da.max(db) > 0.125 * l * l * m3;
+            if l <= tol || falling {
+                return Ok(Some(refine(g, [a, ga], [b, gb], tol)));
+            }
+        }
+        width = 0.5 * l;
+    }
+    Ok(None)
+}
+
+/// The zero of `g` between `a` (g > 0) and `b` (g <= 0), where it is the
+/// only one: Newton's method kept inside the bracket (bisection when it
+/// leaves it), to well below `tol`.
+fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f64 {
+    // The secant, or the middle from a start clamped at zero.
+    let mut x = if ga > 0.0 {
+        a + ga / (ga - gb) * (b - a)
+    } else {
+        0.5 * (a + b)
+    };
+    for _ in 0..100 {
+        if b - a <= tol {
+            return b;
+        }
+        let (gx, dx) = g.eval_d(x);
+        if gx > 0.0 {
+            a = x;
+        } else if gx < 0.0 {
+            b = x;
+        } else {
+            return x;
+        }
+        let mut next = x - gx / dx;
+        if !(next > a && next < b) {
+            next = 0.5 * (a + b);
+        }
+        if (next - x).abs() <= 1e-3 * tol {
+            return next;
+        }
+        x = next;
+    }
+    b
+}
+
+/// Raises `peak` to the largest `|y|` over `[0, e]`: at the ends (`y_end`
+/// the value at `e`), or where `y'` changes sign. `spread` bounds
+/// `|y - y(0)|` over `[0, 1]` (`Poly::spread`): when it keeps `|y|` below
+/// the peak, nothing else is computed.
+pub(super) fn raise_peak_exact(
+    peak: &mut f64,
+    y: &Poly,
+    [y_end, spread]: [f64; 2],
+    e: f64,
+    tol: f64,
+) -> Result<(), Undecided> {
+    let ends = y.c[0].abs().max(y_end.abs());
+    if ends > *peak {
+        *peak = ends;
+    }
+    if y.c[0].abs() + spread <= *peak || y.c[0].abs() + y.spread(e) <= *peak {
+        return Ok(());
+    }
+    let dy = y.derivative();
+    let dy_spread = dy.spread(e);
+    if dy.c[0].abs() > dy_spread {
+        return Ok(()); // y' keeps its sign: the ends decide
+    }
+    // The sign of y' just after 0 (y' may start at zero).
+    let scale = dy.c[0].abs() + dy_spread;
+    let Some(&lead) = dy.coefs().iter().find(|x| x.abs() > 1e-12 * scale) else {
+        return Ok(()); // y is constant
+    };
+    // y' with the sign it has just after 0; searched past a zero start.
+    let mut g = dy;
+    if lead < 0.0 {
+        g.negate();
+    }
+    let past = (g.c[0] <= 1e-12 * scale)
+        .then(|| g.past_zero_start())
+        .flatten();
+    let start = past.as_ref().unwrap_or(&g);
+    let (g0, d0) = start.eval_d(0.0);
+    let mut zero = first_zero(start, start.bounds(), [0.0, g0.max(0.0), d0], e, tol)?;
+    let bounds = g.bounds(); // the same for either sign
+    for _ in 0..MAX_CRITICAL_POINTS {
+        let Some(r) = zero else {
+            return Ok(());
+        };
+        let at = y.eval(r).abs();
+        if at > *peak {
+            *peak = at;
+        }
+        // The next sign change of y', from the other side.
+        g.negate();
+        let (ga, da) = g.eval_d(r);
+        zero = first_zero(&g, bounds, [r, ga.max(0.0), da], e, tol)?;
+    }
+    Err(Undecided)
+}
+
+/// `1 / (k + 1)` for k = 0.., to take the integrals' and the Taylor
+/// terms' divisions as products.
+pub(super) const INV: [f64; N_COEF + 1] = {
+    let mut inv = [0.0; N_COEF + 1];
+    let mut k = 0;
+    while k <= N_COEF {
+        inv[k] = 1.0 / (k + 1) as f64;
+        k += 1;
+    }
+    inv
+};
+
+/// `∫_0^s p(σ) dσ`.
+pub(super) fn integral(p: &Poly, s: f64) -> f64 {
+    let mut total = 0.0;
+    for k in (0..=p.deg).rev() {
+        total = total * s + p.c[k] * INV[k];
+    }
+    total * s
+}
+
+/// Gauss–Legendre nodes and weights on [0, 1], 12 points: exact for
+/// polynomials of degree 23.
+const GAUSS_NODES: [f64; 12] = [
+    0.009219682876640378,
+    0.0479413718147626,
+    0.11504866290284765,
+    0.20634102285669126,
+    0.31608425050090994,
+    0.43738329574426554,
+    0.5626167042557344,
+    0.6839157494990901,
+    0.7936589771433087,
+    0.8849513370971523,
+    0.9520586281852375,
+    0.9907803171233596,
+];
+const GAUSS_WEIGHTS: [f64; 12] = [
+    0.023587668193255706,
+    0.05346966299765953,
+    0.08003916427167321,
+    0.10158371336153287,
+    0.1167462682691773,
+    0.12457352290670134,
+    0.12457352290670134,
+    0.1167462682691773,
+    0.10158371336153287,
+    0.08003916427167321,
+    0.05346966299765953,
+    0.023587668193255706,
+];
+
+/// `∫_0^s p(σ)² dσ` for a Taylor polynomial of the motion, by the 12-point
+/// Gauss rule (the evaluations run side by side): exact for the square's
+/// terms up to degree 23; those above fall as `(2ρ)^k / k!` with
+/// `ρ <= 0.5 (1 + 2ζ)` (`exact_map::MAP_H_OMEGA`), below 1e-22 of the first.
+pub(super) fn integral_of_square(p: &Poly, s: f64) -> f64 {
+    let x = GAUSS_NODES.map(|x| x * s);
+    let mut y = [0.0; 12];
+    for &c in p.coefs().iter().rev() {
+        for i in 0..12 {
+            y[i] = y[i] * x[i] + c;
+        }
+    }
+    let mut total = 0.0;
+    for i in 0..12 {
+        total += GAUSS_WEIGHTS[i] * y[i] * y[i];
+    }
+    total * s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn poly(c: &[f64]) -> Poly {
+        let mut k = [0.0; N_COEF];
+        k[..c.len()].copy_from_slice(c);
+        Poly::new(k, c.len() - 1)
+    }
+
+    /// Coefficients of `lead · Π (s - r)`.
+    fn from_roots(lead: f64, roots: &[f64]) -> Poly {
+        let mut c = vec![lead];
+        for r in roots {
+            let mut next = vec![0.0; c.len() + 1];
+            for (k, x) in c.iter().enumerate() {
+                next[k + 1] += x;
+                next[k] -= r * x;
+            }
+            c = next;
+        }
+        poly(&c)
+    }
+
+    fn first_zero_from_start(g: &Poly) -> Option<f64> {
+        let (g0, d0) = g.eval_d(0.0);
+        first_zero(g, g.bounds(), [0.0, g0, d0], 1.0, 1e-13).unwrap()
+    }
+
+    #[test]
+    fn the_first_of_close_zeros_is_found() {
+        // Expected: the smallest root of polynomials built from their roots
+        // (positive at 0), to 1e-12; a dip below zero between two roots
+        // 2e-3 apart is not passed over; a graze 1e-9 above zero has none.
+        let cases: [(&[f64], f64); 4] = [
+            (&[0.3, 0.35, 0.8], -1.0),
+            (&[0.499, 0.501], 1.0),
+            (&[0.9], -2.0),
+            (&[0.05, 0.0501, 0.6, 0.61], 1.0),
+        ];
+        for (roots, lead) in cases {
+            let g = from_roots(lead, roots);
+            assert!(g.eval(0.0) > 0.0);
+            let s = first_zero_from_start(&g).expect("a zero");
+            assert!((s - roots[0]).abs() < 1e-12, "{roots:?}: {s}");
+        }
+        let mut graze = from_roots(1.0, &[0.5, 0.5]);
+        graze.c[0] += 1e-9;
+        assert_eq!(first_zero_from_start(&graze), None);
+        // A guard at zero that grows as s²: searched past its zero start.
+        let g = poly(&[0.0, 0.0, 1.0, -1.6]); // s²(1 - 1.6 s): zero at 0.625
+        let past = g.past_zero_start().unwrap();
+        assert!((first_zero_from_start(&past).unwrap() - 0.625).abs() < 1e-12);
+        assert!(poly(&[0.0, -1.0, 3.0]).past_zero_start().is_none());
+        // A guard hovering 1e-18 above zero over a stretch of ~0.01
+        // (1e-18 + 1e-3 (s - 0.5)^6): no proof reaches across it within
+        // the budget, and the search says so instead of guessing.
+        let mut hover = from_roots(1e-3, &[0.5; 6]);
+        hover.c[0] += 1e-18;
+        let (g0, d0) = hover.eval_d(0.0);
+        assert_eq!(
+            first_zero(&hover, hover.bounds(), [0.0, g0, d0], 1.0, 1e-13),
+            Err(Undecided)
+        );
+    }
+}
