@@ -248,7 +248,6 @@ impl Simulator {
     /// and switched at the step end; so are all guards after
     /// `MAX_EVENTS_PER_STEP` events in one step.
     pub(super) fn step_located(&mut self, t1: f64, exc: &Excitation, t_ref: f64) {
-        let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
         let mut muted: u32 = 0;
         let mut fired_at_once: u32 = 0;
         let mut events = 0;
@@ -311,14 +310,34 @@ impl Simulator {
                     if theta >= 1.0 {
                         self.t = t1;
                     }
-                    self.fire_violated(exc, t_ref, all & !muted, 1 << located);
-                    events += 1;
-                    if events >= MAX_EVENTS_PER_STEP {
-                        muted = all;
-                    }
+                    self.fire_located(exc, t_ref, located, &mut muted, &mut events);
                 }
             }
         }
+        self.fire_muted(exc, t_ref, muted);
+    }
+
+    /// Fires the located guard `j` whatever its sign after rounding, and
+    /// every other guard not `muted` that has reached zero too; counts the
+    /// step's `events` and mutes every guard after `MAX_EVENTS_PER_STEP`.
+    pub(super) fn fire_located(
+        &mut self,
+        exc: &Excitation,
+        t_ref: f64,
+        j: usize,
+        muted: &mut u32,
+        events: &mut u32,
+    ) {
+        let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
+        self.fire_violated(exc, t_ref, all & !*muted, 1 << j);
+        *events += 1;
+        if *events >= MAX_EVENTS_PER_STEP {
+            *muted = all;
+        }
+    }
+
+    /// At a step's end: the guards muted in it switch there if violated.
+    pub(super) fn fire_muted(&mut self, exc: &Excitation, t_ref: f64, muted: u32) {
         if muted != 0 {
             self.stats.muted += u64::from(muted.count_ones());
             self.fire_violated(exc, t_ref, muted, 0);

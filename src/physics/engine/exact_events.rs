@@ -234,7 +234,6 @@ impl Simulator {
     /// fine RK4 steps.
     pub(super) fn exact_substep(&mut self, t1: f64, piece: &Piece) {
         let (exc, t_ref) = (&piece.exc, piece.t_ref);
-        let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
         let mut muted: u32 = 0;
         let mut fired_at_once: u32 = 0;
         let mut events = 0;
@@ -274,20 +273,11 @@ impl Simulator {
                     if s >= 1.0 {
                         self.t = t1;
                     }
-                    // The located guard fires whatever its sign after
-                    // rounding; others fire if they have reached zero too.
-                    self.fire_violated(exc, t_ref, all & !muted, 1 << j);
-                    events += 1;
-                    if events >= MAX_EVENTS_PER_STEP {
-                        muted = all;
-                    }
+                    self.fire_located(exc, t_ref, j, &mut muted, &mut events);
                 }
             }
         }
-        if muted != 0 {
-            self.stats.muted += u64::from(muted.count_ones());
-            self.fire_violated(exc, t_ref, muted, 0);
-        }
+        self.fire_muted(exc, t_ref, muted);
     }
 
     /// The first zero over the stretch of `flow` among the guards of the
