@@ -51,12 +51,12 @@ fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, [u, v]: [&mut 
 
 /// For the sample loop (`samples.rs`), over one whole substep from `z`
 /// where its bounds could not exclude a new interior peak: raises `peak_u`
-/// to the largest `|u|` and `peak_a` to the largest absolute acceleration
+/// (when given) to the largest `|u|` and `peak_a` to the largest absolute acceleration
 /// `cf - w2 u - cm v` (held inputs), exactly, on the Taylor polynomials;
 /// `ends` are u and the acceleration at the substep's end.
 #[inline(never)]
 pub(super) fn raise_substep_peaks(
-    [peak_u, peak_a]: [&mut f64; 2],
+    [peak_u, peak_a]: [Option<&mut f64>; 2],
     z: [f64; 4],
     h: f64,
     [w2, cm, cf]: [f64; 3],
@@ -66,13 +66,18 @@ pub(super) fn raise_substep_peaks(
     let (mut u, mut v) = (Poly::default(), Poly::default());
     taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
-    raise_peak_exact(peak_u, &u, [u_end, u.spread(1.0)], 1.0, tol)?;
-    let mut a = u;
-    for (ak, vk) in a.c[..=deg].iter_mut().zip(&v.c) {
-        *ak = -w2 * *ak - cm * vk;
+    if let Some(peak) = peak_u {
+        raise_peak_exact(peak, &u, [u_end, u.spread(1.0)], 1.0, tol)?;
     }
-    a.c[0] += cf;
-    raise_peak_exact(peak_a, &a, [a_end, a.spread(1.0)], 1.0, tol)
+    if let Some(peak) = peak_a {
+        let mut a = u;
+        for (ak, vk) in a.c[..=deg].iter_mut().zip(&v.c) {
+            *ak = -w2 * *ak - cm * vk;
+        }
+        a.c[0] += cf;
+        raise_peak_exact(peak, &a, [a_end, a.spread(1.0)], 1.0, tol)?;
+    }
+    Ok(())
 }
 
 /// The structure's cluster over the rest of a substep, of length `h`, from

@@ -363,18 +363,20 @@ impl Simulator {
                     });
                 let (e0, e1) = (a_abs.abs(), a1.abs());
                 let ends = if e0 > e1 { e0 } else { e1 };
-                let a_proved = u_proved
-                    && (ends + sag <= peak_a0 || {
-                        // Rates: A' = -w2 v - cm (A - ag) (no slope of Fext here).
-                        let j0 = -w2 * vel[0] - cm * (a_abs - a_s);
-                        let j1 = -w2 * v1 - cm * (a1 - a_e);
-                        let fifth = map.five_over_three * s3;
-                        raise_peak_proved(&mut peak_a0, [a_abs, j0, a1, j1], h, fifth, || {
-                            map.sup_v(4, &z)
-                        })
-                    });
-                if !a_proved {
-                    let peaks = [&mut peak_u0, &mut peak_a0];
+                let a_proved = ends + sag <= peak_a0 || {
+                    // Rates: A' = -w2 v - cm (A - ag) (no slope of Fext here).
+                    let j0 = -w2 * vel[0] - cm * (a_abs - a_s);
+                    let j1 = -w2 * v1 - cm * (a1 - a_e);
+                    let fifth = map.five_over_three * s3;
+                    raise_peak_proved(&mut peak_a0, [a_abs, j0, a1, j1], h, fifth, || {
+                        map.sup_v(4, &z)
+                    })
+                };
+                if !(u_proved && a_proved) {
+                    let peaks = [
+                        (!u_proved).then_some(&mut peak_u0),
+                        (!a_proved).then_some(&mut peak_a0),
+                    ];
                     let rates = [w2, cm, cf];
                     if raise_substep_peaks(peaks, z, h, rates, degree, [u1, a1]).is_err() {
                         stop = Stop { k, sub };
