@@ -257,8 +257,14 @@ impl Simulator {
             };
             match next {
                 Next::AtOnce(at_once) => {
-                    // Fired once already in this substep: muted instead.
-                    muted |= at_once & fired_at_once;
+                    // Fired once already in this substep: a contact that
+                    // chatters (a degenerate stack, such as equal friction
+                    // above and below a block). The rest of the substep goes
+                    // to fine RK4 steps, whose chatter guard mutes it for
+                    // one fine step, not for the whole substep.
+                    if at_once & fired_at_once != 0 {
+                        return self.fine_steps(t1, piece);
+                    }
                     let fire = at_once & !fired_at_once;
                     fired_at_once |= fire;
                     if fire != 0 {

@@ -164,7 +164,8 @@ pub(super) fn first_zero(
 
 /// The zero of `g` between `a` (g > 0) and `b` (g <= 0), where it is the
 /// only one: Newton's method kept inside the bracket (bisection when it
-/// leaves it), to well below `tol`.
+/// leaves it), to well below `tol`; the instant returned is past the zero
+/// by at most `tol`, where `g <= 0`.
 fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f64 {
     // The secant, or the middle from a start clamped at zero.
     let mut x = if ga > 0.0 {
@@ -182,14 +183,18 @@ fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f
         } else if gx < 0.0 {
             b = x;
         } else {
-            return x;
+            return (x + 0.5 * tol).min(b);
         }
         let mut next = x - gx / dx;
         if !(next > a && next < b) {
             next = 0.5 * (a + b);
         }
         if (next - x).abs() <= 1e-3 * tol {
-            return next;
+            // Just past the zero, where the guard has changed sign (as the
+            // bracket's right end): a guard that reaches zero at the same
+            // instant up to rounding (equal frictions in a stack) is then
+            // negative too and fires with it.
+            return (next + 0.5 * tol).min(b);
         }
         x = next;
     }
