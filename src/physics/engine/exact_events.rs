@@ -22,9 +22,10 @@
 //! of the derivative, found the same way); the guard fires, the mode is
 //! resolved, and the rest of the substep continues in the new mode. The
 //! chatter guards of `Simulator::step_located` are kept: a guard violated
-//! from the start fires at once (a zero-length event), an interface that
-//! does so twice in the substep is muted until its end, and so is every
-//! guard after `MAX_EVENTS_PER_STEP` events.
+//! from the start fires at once (a zero-length event), and every guard is
+//! muted after `MAX_EVENTS_PER_STEP` events; an interface that fires at once
+//! twice in the substep hands its rest to fine RK4 steps, which mute it for
+//! one fine step only.
 
 use super::exact_map::degree;
 use super::poly::*;
