@@ -224,6 +224,22 @@ pub(super) fn raise_peak_exact(
     if dy.c[0].abs() > dy_spread {
         return Ok(()); // y' keeps its sign: the ends decide
     }
+    // The common case, one critical point: y' changes sign between the
+    // ends and y'' keeps its sign over [0, e], so y' has a single zero.
+    let ddy = dy.derivative();
+    let (d0, d_end) = (dy.c[0], dy.eval(e));
+    if d0 * d_end < 0.0 && ddy.c[0].abs() > ddy.spread(e) {
+        let mut g = dy;
+        if d0 < 0.0 {
+            g.negate();
+        }
+        let r = refine(&g, [0.0, g.c[0]], [e, g.eval(e)], tol);
+        let at = y.eval(r).abs();
+        if at > *peak {
+            *peak = at;
+        }
+        return Ok(());
+    }
     // The sign of y' just after 0 (y' may start at zero).
     let scale = dy.c[0].abs() + dy_spread;
     let Some(&lead) = dy.coefs().iter().find(|x| x.abs() > 1e-12 * scale) else {
