@@ -139,6 +139,11 @@ fn main() {
     rigid.mus[0] = 10.0;
     rigid.muk[0] = 10.0;
     scenes.push(("N = 1, never slides".into(), rigid));
+    // Warm-up, untimed (the first scene measured otherwise ran up to 1.5x
+    // slower in some runs while the machine came out of idle).
+    if !smoke {
+        timed(&scenes[0].1, &gm, 5, reps);
+    }
     let mut per_step = Vec::new();
     for (name, p) in &scenes {
         let (t, floor) = timed(p, &gm, rounds, reps);
