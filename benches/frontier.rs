@@ -30,31 +30,10 @@ fn record_20s() -> GroundMotion {
     common::truncate(&gm, 20.0)
 }
 
-/// The paper's stack, and N blocks with
-/// lighter, less rough blocks higher up.
-fn scene(n: usize) -> Params {
-    let mut p = Params::default();
-    p.n_blocks = n;
-    for j in 2..n {
-        p.alpha[j] = 0.25 / j as f64;
-        // Friction falling upwards, never equal to the one below (equal
-        // coefficients make a riding block's stick force exactly mus N,
-        // where stuck and sliding are both consistent).
-        p.mus[j] = 0.05 - 0.004 * (j - 1) as f64;
-        p.muk[j] = p.mus[j];
-    }
-    p
-}
-
 fn simulate(p: &Params, gm: &GroundMotion) -> Simulator {
     let mut sim = Simulator::new(p, &Settings::default()).unwrap();
     record::run(&mut sim, gm, 1.0).unwrap();
     sim
-}
-
-fn median(mut x: Vec<f64>) -> f64 {
-    x.sort_by(|a, b| a.total_cmp(b));
-    x[x.len() / 2]
 }
 
 /// Median seconds per simulation of `p` and of the floor, timed alternately.
@@ -74,7 +53,7 @@ fn timed(p: &Params, gm: &GroundMotion, rounds: usize, reps: usize) -> (f64, f64
         }
         floor.push(t.elapsed().as_secs_f64() / reps as f64);
     }
-    (median(engine), median(floor))
+    (common::median(engine), common::median(floor))
 }
 
 /// Errors of the default settings against the exact reference: the timed
@@ -128,14 +107,14 @@ fn main() {
         "scene", "median", "floor", "ratio", "events", "steps", "peaks", "energy"
     );
     let mut scenes: Vec<(String, Params)> = vec![
-        ("bare structure (N = 0)".into(), scene(0)),
-        ("N = 1".into(), scene(1)),
-        ("two-block scene (paper)".into(), scene(2)),
-        ("N = 4".into(), scene(4)),
-        ("N = 8".into(), scene(8)),
+        ("bare structure (N = 0)".into(), common::graded_stack(0)),
+        ("N = 1".into(), common::graded_stack(1)),
+        ("two-block scene (paper)".into(), common::graded_stack(2)),
+        ("N = 4".into(), common::graded_stack(4)),
+        ("N = 8".into(), common::graded_stack(8)),
     ];
     // One block that never slides, to price a switch against (same record).
-    let mut rigid = scene(1);
+    let mut rigid = common::graded_stack(1);
     rigid.mus[0] = 10.0;
     rigid.muk[0] = 10.0;
     scenes.push(("N = 1, never slides".into(), rigid));

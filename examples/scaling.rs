@@ -9,18 +9,16 @@
 //! - `period`: Tp 0.02–5 s (dt ω from 1.6 down to 0.006), the bare structure;
 //! - `events`: the single block's friction from 0.02 to 1 (more switches as
 //!   it falls), 20 s;
-//! - `height`: 0 to 8 blocks (`benches/frontier.rs`'s scenes), 20 s.
+//! - `height`: 0 to 8 blocks (`common::graded_stack`, the frontier bench's scenes), 20 s.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
 
 use stacked_live_load::ground::{record, synthetic};
 use stacked_live_load::physics::sdof;
 use stacked_live_load::*;
 use std::hint::black_box;
 use std::time::Instant;
-
-fn median(mut x: Vec<f64>) -> f64 {
-    x.sort_by(|a, b| a.total_cmp(b));
-    x[x.len() / 2]
-}
 
 fn point(sweep: &str, x: f64, p: &Params, gm: &GroundMotion, rounds: usize) {
     let reps = (200_000 / gm.time.len()).max(3);
@@ -45,25 +43,11 @@ fn point(sweep: &str, x: f64, p: &Params, gm: &GroundMotion, rounds: usize) {
     }
     println!(
         "{sweep},{x},{:.3},{:.3},{},{}",
-        median(engine) * 1e6,
-        median(floor) * 1e6,
+        common::median(engine) * 1e6,
+        common::median(floor) * 1e6,
         stats.events,
         stats.steps
     );
-}
-
-fn stack(n: usize) -> Params {
-    let mut p = Params::default();
-    p.n_blocks = n;
-    for j in 2..n {
-        p.alpha[j] = 0.25 / j as f64;
-        // Friction falling upwards, never equal to the one below (equal
-        // coefficients make a riding block's stick force exactly mus N,
-        // where stuck and sliding are both consistent).
-        p.mus[j] = 0.05 - 0.004 * (j - 1) as f64;
-        p.muk[j] = p.mus[j];
-    }
-    p
 }
 
 fn main() {
@@ -74,21 +58,21 @@ fn main() {
     println!("sweep,x,engine_us,floor_us,events,steps");
     for seconds in [5.0, 10.0, 20.0, 40.0, 80.0] {
         let gm = synthetic::broadband(seconds, 0.005, 0.4 * 9.81);
-        point("length", seconds, &stack(2), &gm, rounds);
+        point("length", seconds, &common::graded_stack(2), &gm, rounds);
     }
     let gm = synthetic::broadband(20.0, 0.005, 0.4 * 9.81);
     for tp in [0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0] {
-        let mut p = stack(0);
+        let mut p = common::graded_stack(0);
         p.tp = tp;
         point("period", tp, &p, &gm, rounds);
     }
     for mu in [0.02, 0.05, 0.1, 0.2, 0.4, 1.0] {
-        let mut p = stack(1);
+        let mut p = common::graded_stack(1);
         p.mus[0] = mu;
         p.muk[0] = mu;
         point("events", mu, &p, &gm, rounds);
     }
     for n in 0..=8 {
-        point("height", n as f64, &stack(n), &gm, rounds);
+        point("height", n as f64, &common::graded_stack(n), &gm, rounds);
     }
 }

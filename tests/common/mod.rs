@@ -498,3 +498,25 @@ pub fn instance(name: &str) -> (Instance, Capture) {
     let log = Capture::default();
     (Instance::new(name, None, Box::new(log.clone()), false), log)
 }
+
+/// The benchmarks' stacks (`benches/frontier.rs`, `examples/scaling.rs`):
+/// the paper's two blocks (`Params::default`), and above them lighter, less
+/// rough blocks, friction falling upwards but never equal to the one below
+/// (equal coefficients make a riding block's stick force exactly mus N,
+/// where stuck and sliding are both consistent).
+pub fn graded_stack(n: usize) -> stacked_live_load::Params {
+    let mut p = stacked_live_load::Params::default();
+    p.n_blocks = n;
+    for j in 2..n {
+        p.alpha[j] = 0.25 / j as f64;
+        p.mus[j] = 0.05 - 0.004 * (j - 1) as f64;
+        p.muk[j] = p.mus[j];
+    }
+    p
+}
+
+/// Median of timings.
+pub fn median(mut x: Vec<f64>) -> f64 {
+    x.sort_by(|a, b| a.total_cmp(b));
+    x[x.len() / 2]
+}
