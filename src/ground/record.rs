@@ -117,6 +117,17 @@ pub fn advance_with_record<S: Stepper>(
     if sim.takes_samples(extra) && t_end > sim.time() && record.time.len() >= 2 {
         return advance_by_samples(sim, t_end, record, scale, extra);
     }
+    advance_by_pieces(sim, t_end, record, scale, extra)
+}
+
+/// As [`advance_with_record`], one linear piece per sample interval.
+fn advance_by_pieces<S: Stepper>(
+    sim: &mut S,
+    t_end: f64,
+    record: &GroundMotion,
+    scale: f64,
+    extra: &Excitation,
+) -> Result<(), SimError> {
     let t_start = sim.time();
     let mut t = t_start;
     let mut done = false;
@@ -148,7 +159,7 @@ pub fn advance_with_record<S: Stepper>(
 /// As [`advance_with_record`] for a stepper with a path of its own for
 /// whole samples (held inputs): the samples from one at the current time to
 /// the last before `t_end` go to it in one call, the partial intervals at
-/// either end as pieces.
+/// either end to [`advance_by_pieces`].
 fn advance_by_samples<S: Stepper>(
     sim: &mut S,
     t_end: f64,
@@ -176,14 +187,8 @@ fn advance_by_samples<S: Stepper>(
             })?;
             continue;
         }
-        let (a, slope, piece_end) = record.piece_before(i, t);
-        let exc = Excitation {
-            ag: scale * a + extra.ag,
-            ag_rate: scale * slope,
-            fext: extra.fext,
-            fext_rate: 0.0,
-        };
-        sim.advance_pieces(std::iter::once((piece_end.min(t_end), exc)))?;
+        let next_sample = record.time.get(i).copied().unwrap_or(f64::INFINITY);
+        advance_by_pieces(sim, next_sample.min(t_end), record, scale, extra)?;
     }
 }
 
