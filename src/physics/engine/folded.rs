@@ -172,68 +172,75 @@ fn peak_near(
 }
 
 /// Whether the absolute acceleration stays inside the stick band `[lo, hi]`
-/// over the substep from `z` to `x`: its ends, `sup|A''| <= s3`, and (only
-/// when that does not decide) its rates at the ends.
-#[allow(clippy::too_many_arguments)]
+/// over a substep of length `h`: its ends `a0`, `a1`, `sup|A''| <= s3`, and
+/// (only when that does not decide) its rates at the ends, `jerks()`.
 #[inline(always)]
-fn in_band_proved(
-    st: &Stepping,
-    map: &ExactMap,
-    z: &[f64; 4],
-    x: &End,
-    [a0, ag0]: [f64; 2],
-    hs: f64,
+pub(super) fn in_band_proved(
+    [a0, a1]: [f64; 2],
+    jerks: impl FnOnce() -> [f64; 2],
+    h: f64,
     s3: f64,
     [lo, hi]: [f64; 2],
 ) -> bool {
-    let a1 = x.accel;
-    let sag = 0.125 * hs * hs * s3;
+    let sag = 0.125 * h * h * s3;
     // Plain comparisons (f64::min and max carry NaN rules not needed here).
     let (low, high) = if a0 < a1 { (a0, a1) } else { (a1, a0) };
     (low - sag > lo && high + sag < hi) || {
-        let (j0, j1) = (st.jerk(map, z[1], a0, ag0), st.jerk(map, x.v, a1, x.ag));
-        stays_positive([a0 - lo, j0, a1 - lo, j1], hs, s3)
-            && stays_positive([hi - a0, -j0, hi - a1, -j1], hs, s3)
+        let [j0, j1] = jerks();
+        stays_positive([a0 - lo, j0, a1 - lo, j1], h, s3)
+            && stays_positive([hi - a0, -j0, hi - a1, -j1], h, s3)
+    }
+}
+
+/// Whether the slip guard between the structure's cluster and the one above
+/// stays positive over a substep of length `h`: its ends `g0`, `g1` (the
+/// signed relative velocity), `|g''| <= bound`, and (only when that does not
+/// decide) its rates at the ends, `rates()`.
+#[inline(always)]
+pub(super) fn slip_guard_proved(
+    [g0, g1]: [f64; 2],
+    rates: impl FnOnce() -> [f64; 2],
+    h: f64,
+    bound: f64,
+) -> bool {
+    let sag = 0.125 * h * h * bound;
+    (g0 > sag && g1 > sag) || {
+        let [d0, d1] = rates();
+        stays_positive([g0, d0, g1, d1], h, bound)
     }
 }
 
 /// Raises the structure's peaks of |u0| and |A0| over the substep from `z`
-/// to `x` (`A0` the absolute acceleration; `a0`, `ag0` it and the ground's
-/// at the start) when that is proved; false otherwise. Quick tests first:
-/// the larger end plus `h²/8 sup|y''|` (`sup|u''| = sup|v'|`, `sup|A''| =
-/// sup|v'''|`); then the cubic bounds with the rates.
+/// (end values `u1`, `v1`; the absolute acceleration `a0` and `a1` at the
+/// ends, its rates `jerks()`) where that is proved; returns which were.
+/// Quick tests first: the larger end plus `h²/8 sup|y''|` (`sup|u''| =
+/// sup|v'|`, `sup|A''| = sup|v'''| <= s3`); then the cubic bounds with the
+/// rates.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn structure_peaks_proved(
-    st: &Stepping,
+pub(super) fn structure_peaks_proved(
     map: &ExactMap,
     z: &[f64; 4],
-    x: &End,
-    [a0, ag0]: [f64; 2],
-    hs: f64,
+    [u1, v1]: [f64; 2],
+    [a0, a1]: [f64; 2],
+    jerks: impl FnOnce() -> [f64; 2],
+    h: f64,
     s3: f64,
     [peak_u0, peak_a0]: [&mut f64; 2],
-) -> bool {
-    let sag = 0.125 * hs * hs * s3;
-    let (e0, e1) = (z[0].abs(), x.u.abs());
+) -> [bool; 2] {
+    let sag = 0.125 * h * h * s3;
+    let (e0, e1) = (z[0].abs(), u1.abs());
     let ends = if e0 > e1 { e0 } else { e1 };
     let u_proved = ends + sag * map.one_over_three <= *peak_u0
-        || raise_peak_proved(peak_u0, [z[0], z[1], x.u, x.v], hs, s3, || map.sup_v(2, z));
-    if !u_proved {
-        return false;
-    }
-    let (e0, e1) = (a0.abs(), x.accel.abs());
+        || raise_peak_proved(peak_u0, [z[0], z[1], u1, v1], h, s3, || map.sup_v(2, z));
+    let (e0, e1) = (a0.abs(), a1.abs());
     let ends = if e0 > e1 { e0 } else { e1 };
-    ends + sag <= *peak_a0 || {
-        let (j0, j1) = (
-            st.jerk(map, z[1], a0, ag0),
-            st.jerk(map, x.v, x.accel, x.ag),
-        );
+    let a_proved = ends + sag <= *peak_a0 || {
+        let [j0, j1] = jerks();
         let fifth = map.five_over_three * s3;
-        raise_peak_proved(peak_a0, [a0, j0, x.accel, j1], hs, fifth, || {
-            map.sup_v(4, z)
-        })
-    }
+        raise_peak_proved(peak_a0, [a0, j0, a1, j1], h, fifth, || map.sup_v(4, z))
+    };
+    [u_proved, a_proved]
 }
 
 /// Whether `g > 0` over `(0, h]` is proved from its ends (values `g0`, `g1`,
@@ -325,12 +332,14 @@ impl Simulator {
             let z = [u0, v0, p, st.p1];
             let x = st.step(map, &z, ag, hs);
             let s3 = map.sup_v(3, &z);
-            let start = [a0, ag];
-            if has_band && !in_band_proved(&st, map, &z, &x, start, hs, s3, [band_lo, band_hi]) {
+            let ends = [a0, x.accel];
+            let jerks = || [st.jerk(map, z[1], a0, ag), st.jerk(map, x.v, x.accel, x.ag)];
+            if has_band && !in_band_proved(ends, jerks, hs, s3, [band_lo, band_hi]) {
                 break;
             }
             let peaks = [&mut peak_u0, &mut peak_a0];
-            if !structure_peaks_proved(&st, map, &z, &x, start, hs, s3, peaks) {
+            if structure_peaks_proved(map, &z, [x.u, x.v], ends, jerks, hs, s3, peaks) != [true; 2]
+            {
                 break;
             }
             (u0, v0, a0, p, ag) = (x.u, x.v, x.accel, x.p, x.ag);
@@ -415,38 +424,35 @@ impl Simulator {
             (du[0], v_end[0]) = (x.u - u0, x.v);
             upper.step(&vel, ag, hs, &mut du, &mut v_end);
             let s3 = map.sup_v(3, &z);
-            let start = [a0, ag];
-            if has_band && !in_band_proved(&st, map, &z, &x, start, hs, s3, [band_lo, band_hi]) {
+            let ends = [a0, x.accel];
+            let jerks = || [st.jerk(map, z[1], a0, ag), st.jerk(map, x.v, x.accel, x.ag)];
+            if has_band && !in_band_proved(ends, jerks, hs, s3, [band_lo, band_hi]) {
                 break;
             }
             // sup|v0''|, and with the ground's slope the bound on the second
             // derivative of a relative velocity to the structure's cluster.
             let s2 = map.sup_v(2, &z);
-            let sag = 0.125 * hs * hs * (s2 + st.ag_rate.abs());
             for m in 0..NC - 1 {
-                let (g0, g1) = (
-                    slip_sign[m] * (vel[m + 1] - vel[m]),
-                    slip_sign[m] * (v_end[m + 1] - v_end[m]),
-                );
+                let s = slip_sign[m];
+                let (g0, g1) = (s * (vel[m + 1] - vel[m]), s * (v_end[m + 1] - v_end[m]));
                 // Between two upper clusters the relative velocity is linear
                 // in time (the ground's terms cancel): the ends decide.
                 let holds = if m == 0 {
-                    (g0 > sag && g1 > sag) || {
-                        // Rates: the upper cluster's constant acceleration
-                        // minus the structure's.
-                        let s = slip_sign[m];
-                        let (d0, d1) = (s * (upper.accel(1) - a0), s * (upper.accel(1) - x.accel));
-                        stays_positive([g0, d0, g1, d1], hs, s2 + st.ag_rate.abs())
-                    }
+                    // Rates: the upper cluster's constant acceleration minus
+                    // the structure's.
+                    let rates = || [s * (upper.accel(1) - a0), s * (upper.accel(1) - x.accel)];
+                    slip_guard_proved([g0, g1], rates, hs, s2 + st.ag_rate.abs())
                 } else {
                     g0 >= 0.0 && g1 > 0.0
                 };
-                if slip_sign[m] != 0.0 && !holds {
+                if s != 0.0 && !holds {
                     break 'steps;
                 }
             }
             let peaks = [&mut peak_u0, &mut peak_a0];
-            let mut proved = structure_peaks_proved(&st, map, &z, &x, start, hs, s3, peaks);
+            let peaks_proved =
+                structure_peaks_proved(map, &z, [x.u, x.v], ends, jerks, hs, s3, peaks);
+            let mut proved = peaks_proved == [true; 2];
             let mut new_slip = slip;
             for m in 0..NC - 1 {
                 let increment = du[m + 1] - du[m];

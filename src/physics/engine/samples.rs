@@ -18,7 +18,7 @@
 
 use super::exact_events::raise_substep_peaks;
 use super::exact_map::{dot, ExactMap};
-use super::folded::{raise_peak_proved, stays_positive};
+use super::folded::{in_band_proved, raise_peak_proved, slip_guard_proved, structure_peaks_proved};
 use super::lean::safe_accel_band;
 use super::{move_bodies, Excitation, SimError, Simulator};
 use crate::physics::hermite;
@@ -270,7 +270,7 @@ impl Simulator {
         // mass is `cf - ag`, its absolute acceleration `cf - w2 u - cm v`.
         let fm = s.fext * d.inv_mass0;
         let cf = d.slip_load[0] * d.inv_mass0 + fm;
-        let (w2, cm, inv_h, h2_8) = (map.w2, map.cm, 1.0 / h, 0.125 * h * h);
+        let (w2, cm, inv_h) = (map.w2, map.cm, 1.0 / h);
         let inv_n = 1.0 / n_sub as f64;
         // Degree of the Taylor polynomials of a substep (exact peaks).
         let degree = map.degree;
@@ -314,22 +314,16 @@ impl Simulator {
                 let (u1, v1) = (dot(&map.u, &z), dot(&map.v, &z));
                 let a1 = cf - w2 * u1 - cm * v1;
                 let s3 = map.sup_v(3, &z);
-                let sag = h2_8 * s3;
-                // Stuck interfaces: the absolute acceleration stays in the band.
-                if has_band {
-                    let (low, high) = if a_abs < a1 { (a_abs, a1) } else { (a1, a_abs) };
-                    let inside = (low - sag > band_lo && high + sag < band_hi) || {
-                        // Near an edge: Taylor's bounds from both ends, with
-                        // the rates A' = -w2 v - cm (A - ag).
-                        let j0 = -w2 * vel[0] - cm * (a_abs - a_s);
-                        let j1 = -w2 * v1 - cm * (a1 - a_e);
-                        stays_positive([a_abs - band_lo, j0, a1 - band_lo, j1], h, s3)
-                            && stays_positive([band_hi - a_abs, -j0, band_hi - a1, -j1], h, s3)
-                    };
-                    if !inside {
-                        stop = Stop { k, sub };
-                        break 'samples;
-                    }
+                // Stuck interfaces: the absolute acceleration stays in the
+                // band. Rates: A' = -w2 v - cm (A - ag) (no slope of Fext here).
+                let ends = [a_abs, a1];
+                let jerks = || {
+                    let j0 = -w2 * vel[0] - cm * (a_abs - a_s);
+                    [j0, -w2 * v1 - cm * (a1 - a_e)]
+                };
+                if has_band && !in_band_proved(ends, jerks, h, s3, [band_lo, band_hi]) {
+                    stop = Stop { k, sub };
+                    break 'samples;
                 }
                 // Upper clusters: exact polynomials; the ground's terms are
                 // common to all.
@@ -353,12 +347,8 @@ impl Simulator {
                         sign * (v_end[m + 1] - v_end[m]),
                     );
                     let holds = if m == 0 {
-                        let bound = s2 + ag_rate.abs();
-                        let sag_g = h2_8 * bound;
-                        (g0 > sag_g && g1 > sag_g) || {
-                            let (r0, r1) = (sign * (accel_c[1] - a_abs), sign * (accel_c[1] - a1));
-                            stays_positive([g0, r0, g1, r1], h, bound)
-                        }
+                        let rates = || [sign * (accel_c[1] - a_abs), sign * (accel_c[1] - a1)];
+                        slip_guard_proved([g0, g1], rates, h, s2 + ag_rate.abs())
                     } else {
                         // Linear in time between two upper clusters.
                         g0 >= 0.0 && g1 > 0.0
@@ -368,25 +358,11 @@ impl Simulator {
                         break 'samples;
                     }
                 }
-                // Peaks of |u0| and |A0| (u'' = v', A'' = v'''); where the
-                // bounds cannot exclude a new one inside, on the polynomials.
-                let (e0, e1) = (u0.abs(), u1.abs());
-                let ends = if e0 > e1 { e0 } else { e1 };
-                let u_proved = ends + sag * map.one_over_three <= peak_u0
-                    || raise_peak_proved(&mut peak_u0, [u0, vel[0], u1, v1], h, s3, || {
-                        map.sup_v(2, &z)
-                    });
-                let (e0, e1) = (a_abs.abs(), a1.abs());
-                let ends = if e0 > e1 { e0 } else { e1 };
-                let a_proved = ends + sag <= peak_a0 || {
-                    // Rates: A' = -w2 v - cm (A - ag) (no slope of Fext here).
-                    let j0 = -w2 * vel[0] - cm * (a_abs - a_s);
-                    let j1 = -w2 * v1 - cm * (a1 - a_e);
-                    let fifth = map.five_over_three * s3;
-                    raise_peak_proved(&mut peak_a0, [a_abs, j0, a1, j1], h, fifth, || {
-                        map.sup_v(4, &z)
-                    })
-                };
+                // Peaks of |u0| and |A0|; where the bounds cannot exclude a
+                // new one inside, on the polynomials.
+                let peaks = [&mut peak_u0, &mut peak_a0];
+                let [u_proved, a_proved] =
+                    structure_peaks_proved(map, &z, [u1, v1], ends, jerks, h, s3, peaks);
                 if !(u_proved && a_proved) {
                     let peaks = [
                         (!u_proved).then_some(&mut peak_u0),
