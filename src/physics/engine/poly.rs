@@ -374,6 +374,31 @@ mod tests {
     }
 
     #[test]
+    fn a_located_zero_is_just_past_it() {
+        // Expected: for falling polynomials with one zero r in (0, 1) (built
+        // from their roots), the instant returned lies in [r, r + tol] and
+        // the polynomial is <= 0 there, so that a second guard crossing at
+        // the same instant up to rounding has crossed too.
+        let tol = 1e-12;
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..2000 {
+            let r = 0.05 + 0.9 * next();
+            // (r - s) (1 + a s + b s^2) with the second factor positive on [0, 1].
+            let (a, b) = (next() - 0.5, 0.5 * next());
+            let g = poly(&[r, r * a - 1.0, r * b - a, -b]);
+            let x = refine(&g, [0.0, g.eval(0.0)], [1.0, g.eval(1.0)], tol);
+            assert!(x >= r - 1e-15 && x <= r + tol, "r {r}: x - r = {:e}", x - r);
+            assert!(g.eval(x) <= 0.0, "r {r}: g(x) = {:e}", g.eval(x));
+        }
+    }
+
+    #[test]
     fn the_first_of_close_zeros_is_found() {
         // Expected: the smallest root of polynomials built from their roots
         // (positive at 0), to 1e-12; a dip below zero between two roots
