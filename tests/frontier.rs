@@ -13,34 +13,6 @@ use common::*;
 use stacked_live_load::*;
 use std::f64::consts::PI;
 
-/// A broadband record: 60 sines with log-uniform frequencies in 0.1–25 Hz,
-/// amplitudes falling as 1/sqrt(f), random phases, a build-up and a decay,
-/// scaled to a PGA drawn in 0.3–0.6 g; sampled every `dt`.
-fn broadband_record(rng: &mut Rng, duration: f64, dt: f64) -> GroundMotion {
-    let comps: Vec<(f64, f64)> = (0..60)
-        .map(|_| {
-            let f = 0.1 * (250f64).powf(rng.next_f64());
-            (f, 2.0 * PI * rng.next_f64())
-        })
-        .collect();
-    let n = (duration / dt).round() as usize + 1;
-    let rise = 0.15 * duration;
-    let raw: Vec<f64> = (0..n)
-        .map(|i| {
-            let t = i as f64 * dt;
-            let env =
-                (t / rise).min(1.0) * (-(t - 0.6 * duration).max(0.0) / (0.15 * duration)).exp();
-            env * comps
-                .iter()
-                .map(|(f, ph)| (2.0 * PI * f * t + ph).sin() / f.sqrt())
-                .sum::<f64>()
-        })
-        .collect();
-    let peak = raw.iter().fold(0.0f64, |m, a| m.max(a.abs()));
-    let pga = rng.uniform(0.3, 0.6) * 9.81;
-    GroundMotion::uniform(dt, raw.iter().map(|a| a * pga / peak).collect())
-}
-
 /// A random stack of `n` blocks: masses, friction falling upwards on
 /// average so that every interface gets to slip, μs = μk or μs > μk.
 fn random_scene(rng: &mut Rng, n: usize, tp: f64, static_above_kinetic: bool) -> Params {

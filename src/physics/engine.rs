@@ -302,10 +302,11 @@ impl Simulator {
         // last piece ended only by rounding: that is no jump to resolve.
         let rounding = 1e-12 * exc.fext.abs().max(self.fext_now.abs());
         if (exc.fext - self.fext_now).abs() > rounding {
-            self.fext_now = exc.fext;
-            self.resolve_mode(0);
+            // The guards that the jump violates fire as at any event.
+            let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
+            self.fire_violated(exc, self.t, all, 0);
         }
-        self.fext_now = exc.fext;
+        self.take_inputs_now(exc, self.t);
         let h = if self.exact {
             self.map_step()
         } else {

@@ -81,6 +81,16 @@ pub struct ExactResult {
     pub u0_history: Vec<f64>,
 }
 
+/// One linear piece of the inputs, ending at `t_end`; values at its start.
+#[derive(Clone, Copy, Debug)]
+pub struct InputPiece {
+    pub t_end: f64,
+    pub ag: f64,
+    pub ag_rate: f64,
+    pub fext: f64,
+    pub fext_rate: f64,
+}
+
 /// The exact event-driven reference.
 pub struct Exact {
     sys: System,
@@ -120,8 +130,19 @@ impl Exact {
     /// Absolute accelerations of the bodies and interface forces (index j-1
     /// for interface j) in `mode`, from the Delassus system.
     pub fn chain(&self, mode: &Mode, u0: f64, v0: f64) -> (DVector<f64>, DVector<f64>) {
+        self.chain_with_force(mode, u0, v0, 0.0)
+    }
+
+    /// As [`Exact::chain`], with an external force `fext` on the structure.
+    pub fn chain_with_force(
+        &self,
+        mode: &Mode,
+        u0: f64,
+        v0: f64,
+        fext: f64,
+    ) -> (DVector<f64>, DVector<f64>) {
         let n = self.m - 1;
-        let s0 = -self.k * u0 - self.c * v0;
+        let s0 = -self.k * u0 - self.c * v0 + fext;
         let mut f = DVector::zeros(n);
         let stuck: Vec<usize> = (1..=n).filter(|&j| mode.is_stuck(j)).collect();
         for j in 1..=n {
@@ -166,13 +187,15 @@ impl Exact {
         (a, f)
     }
 
-    /// Generator of the augmented state z = [u, v, 1, ag, ag'] in `mode`.
+    /// Generator of the augmented state z = [u, v, 1, ag, ag', Fext, Fext']
+    /// in `mode`.
     fn generator(&self, mode: &Mode) -> DMatrix<f64> {
         let m = self.m;
-        let dim = 2 * m + 3;
+        let dim = 2 * m + 5;
         let (a0, _) = self.chain(mode, 0.0, 0.0);
         let (au, _) = self.chain(mode, 1.0, 0.0);
         let (av, _) = self.chain(mode, 0.0, 1.0);
+        let (af, _) = self.chain_with_force(mode, 0.0, 0.0, 1.0);
         let mut h = DMatrix::zeros(dim, dim);
         for i in 0..m {
             h[(i, m + i)] = 1.0;
@@ -180,8 +203,10 @@ impl Exact {
             h[(m + i, m)] = av[i] - a0[i];
             h[(m + i, 2 * m)] = a0[i];
             h[(m + i, 2 * m + 1)] = -1.0;
+            h[(m + i, 2 * m + 3)] = af[i] - a0[i];
         }
         h[(2 * m + 1, 2 * m + 2)] = 1.0;
+        h[(2 * m + 3, 2 * m + 4)] = 1.0;
         h
     }
 
@@ -189,7 +214,7 @@ impl Exact {
         let m = self.m;
         match mode.contact[j] {
             Contact::Stuck => {
-                let (_, f) = self.chain(mode, z[0], z[m]);
+                let (_, f) = self.chain_with_force(mode, z[0], z[m], z[2 * m + 3]);
                 // Same slack as the engine's consistency tolerance (equal-mu stacks).
                 self.sys.mus[j] * self.normal[j] * (1.0 + mode::CONSISTENCY_TOL) - f[j - 1].abs()
             }
@@ -201,10 +226,30 @@ impl Exact {
     /// Runs the record from rest; `sub` samples per record interval are used
     /// to detect guard crossings and extrema before bisection.
     pub fn run(&self, gm: &GroundMotion, sub: usize) -> ExactResult {
+        let pieces: Vec<InputPiece> = gm
+            .time
+            .windows(2)
+            .zip(gm.accel.windows(2))
+            .map(|(t, a)| InputPiece {
+                t_end: t[1],
+                ag: a[0],
+                ag_rate: (a[1] - a[0]) / (t[1] - t[0]),
+                fext: 0.0,
+                fext_rate: 0.0,
+            })
+            .collect();
+        self.run_pieces(gm.time[0], &pieces, sub)
+    }
+
+    /// Runs from rest at `t_start` through consecutive linear pieces of
+    /// `ag` and `Fext` (values at each piece's start: `Fext` may jump there,
+    /// and a jump is resolved as an instantaneous event, as a stuck contact
+    /// can break under it). `u0_history` holds u0 at every piece end.
+    pub fn run_pieces(&self, t_start: f64, pieces: &[InputPiece], sub: usize) -> ExactResult {
         let m = self.m;
         let n = m - 1;
         let mut mode = Mode::all_stuck(&self.sys);
-        let mut z = DVector::zeros(2 * m + 3);
+        let mut z = DVector::zeros(2 * m + 5);
         z[2 * m] = 1.0;
         let mut res = ExactResult {
             peak_u0: 0.0,
@@ -217,19 +262,30 @@ impl Exact {
         let mut cache: Option<(Mode, f64, DMatrix<f64>, DMatrix<f64>)> = None;
         // Relative displacement of each stuck pair, fixed when it stuck.
         let mut offsets = vec![0.0; m];
-        let extended: Vec<(f64, f64)> = gm
-            .time
-            .iter()
-            .copied()
-            .zip(gm.accel.iter().copied())
-            .collect();
-        for w in extended.windows(2) {
-            let (t_a, a_a) = w[0];
-            let (t_b, a_b) = w[1];
-            let len = t_b - t_a;
-            let slope = (a_b - a_a) / len;
+        let mut t_a = t_start;
+        for piece in pieces {
+            let len = piece.t_end - t_a;
+            t_a = piece.t_end;
+            let (a_a, slope) = (piece.ag, piece.ag_rate);
             z[2 * m + 1] = a_a;
             z[2 * m + 2] = slope;
+            let jump = piece.fext - z[2 * m + 3];
+            z[2 * m + 3] = piece.fext;
+            z[2 * m + 4] = piece.fext_rate;
+            if jump.abs() > 1e-12 * piece.fext.abs().max(1.0) {
+                let before = mode;
+                self.switch(&mut mode, &mut z, 0);
+                for j in 1..m {
+                    if mode.is_stuck(j) && !before.is_stuck(j) {
+                        offsets[j] = z[j] - z[j - 1];
+                    }
+                }
+                res.events += usize::from(mode != before);
+            }
+            if len <= 0.0 {
+                res.u0_history.push(z[0]);
+                continue;
+            }
             let mut tau = 0.0;
             while tau < len {
                 let delta = (len - tau) / sub as f64;
@@ -298,6 +354,7 @@ impl Exact {
                         self.hold_stuck(&mode, &mut z, &offsets);
                         tau += te;
                         z[2 * m + 1] = a_a + slope * tau;
+                        z[2 * m + 3] = piece.fext + piece.fext_rate * tau;
                         let before = mode;
                         self.switch(&mut mode, &mut z, located);
                         for j in 1..m {
@@ -374,7 +431,7 @@ impl Exact {
             zero,
             must_break,
             was_stuck,
-            load0: -self.k * z[0] - self.c * z[m],
+            load0: -self.k * z[0] - self.c * z[m] + z[2 * m + 3],
         };
         *mode = mode::resolve(&self.sys, &req).mode;
     }
@@ -519,4 +576,32 @@ pub fn graded_stack(n: usize) -> stacked_live_load::Params {
 pub fn median(mut x: Vec<f64>) -> f64 {
     x.sort_by(|a, b| a.total_cmp(b));
     x[x.len() / 2]
+}
+
+/// A broadband record: 60 sines with log-uniform frequencies in 0.1–25 Hz,
+/// amplitudes falling as 1/sqrt(f), random phases, a build-up and a decay,
+/// scaled to a PGA drawn in 0.3–0.6 g; sampled every `dt`.
+pub fn broadband_record(rng: &mut Rng, duration: f64, dt: f64) -> GroundMotion {
+    let comps: Vec<(f64, f64)> = (0..60)
+        .map(|_| {
+            let f = 0.1 * (250f64).powf(rng.next_f64());
+            (f, 2.0 * PI * rng.next_f64())
+        })
+        .collect();
+    let n = (duration / dt).round() as usize + 1;
+    let rise = 0.15 * duration;
+    let raw: Vec<f64> = (0..n)
+        .map(|i| {
+            let t = i as f64 * dt;
+            let env =
+                (t / rise).min(1.0) * (-(t - 0.6 * duration).max(0.0) / (0.15 * duration)).exp();
+            env * comps
+                .iter()
+                .map(|(f, ph)| (2.0 * PI * f * t + ph).sin() / f.sqrt())
+                .sum::<f64>()
+        })
+        .collect();
+    let peak = raw.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    let pga = rng.uniform(0.3, 0.6) * 9.81;
+    GroundMotion::uniform(dt, raw.iter().map(|a| a * pga / peak).collect())
 }

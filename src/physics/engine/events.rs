@@ -197,6 +197,15 @@ impl Simulator {
         }
     }
 
+    /// The inputs at the current time inside a piece: every stick/slip
+    /// decision at an instant sees that instant's `Fext` (the structure's
+    /// load), never the value at the piece's start.
+    pub(super) fn take_inputs_now(&mut self, exc: &Excitation, t_ref: f64) {
+        let dt = self.t - t_ref;
+        self.ag_now = exc.ag + exc.ag_rate * dt;
+        self.fext_now = exc.fext + exc.fext_rate * dt;
+    }
+
     /// Guards of the current mode at the current state (infinite for free
     /// interfaces and for j > n).
     pub(super) fn guards_now(&self, exc: &Excitation, t_ref: f64) -> [f64; MAX_BODIES] {
@@ -218,6 +227,7 @@ impl Simulator {
         candidates: u32,
         forced: u32,
     ) -> bool {
+        self.take_inputs_now(exc, t_ref);
         let g = self.guards_now(exc, t_ref);
         let (mut slip_zeroed, mut must_break) = (0, 0);
         for j in 1..=self.sys.n {
