@@ -285,3 +285,30 @@ fn an_interface_at_its_static_limit_breaks() {
     );
     assert_eq!(res.mode.contact[1], Contact::Stuck);
 }
+
+#[test]
+fn the_walk_decides_exactly_as_the_enumeration_of_every_assignment() {
+    // `mode::resolve` walks the stack and drops inconsistent branches;
+    // `mode::resolve_by_enumeration` tries all 3^k assignments in the
+    // selection rule's order. Expected: the same mode and the same
+    // ambiguity flag (consistent_count > 1 where some mus > muk), over
+    // random requests with equal and unequal friction, some interfaces
+    // that must break.
+    let mut rng = Rng(0x3a1f_77c5_9e21_0b4d);
+    let (mut ambiguous, mut breaking) = (0, 0);
+    for i in 0..6000 {
+        let factor = if i % 2 == 0 { (1.0, 1.0) } else { (1.05, 2.5) };
+        let mut case = random_case(&mut rng, factor);
+        if rng.next_f64() < 0.3 {
+            case.req.must_break = case.req.zero & case.req.was_stuck;
+        }
+        let walk = mode::resolve(&case.sys, &case.req);
+        let all = mode::resolve_by_enumeration(&case.sys, &case.req);
+        assert_eq!(walk.mode, all.mode, "case {i}: {:?}", case.req);
+        assert_eq!(walk.consistent, all.consistent, "case {i}");
+        assert_eq!(walk.ambiguous, all.ambiguous, "case {i}");
+        ambiguous += usize::from(walk.ambiguous);
+        breaking += usize::from(case.req.must_break != 0);
+    }
+    assert!(ambiguous > 300 && breaking > 1000, "{ambiguous} {breaking}");
+}

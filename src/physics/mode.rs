@@ -351,6 +351,9 @@ pub struct Resolved {
     /// False when no assignment satisfied the contact law within
     /// [`CONSISTENCY_TOL`] and the least violating one was taken.
     pub consistent: bool,
+    /// Whether the selection rule chose among several consistent
+    /// assignments (possible only with mus > muk at an interface in `zero`).
+    pub ambiguous: bool,
 }
 
 /// Finds a consistent mode: every interface in `zero` is stuck, or starts
@@ -361,12 +364,205 @@ pub struct Resolved {
 /// 1. interfaces in `must_break` do not stay stuck (unless nothing else is consistent);
 /// 2. the largest number of stuck interfaces wins;
 /// 3. then the largest number of interfaces that were stuck before;
-/// 4. then the first in enumeration order, which prefers sticking lower
-///    interfaces and slipping forward.
+/// 4. then the first in enumeration order ([`resolve_by_enumeration`]),
+///    which prefers sticking lower interfaces and slipping forward.
 ///
-/// The search goes from the largest stick set down and stops at the first
-/// size with a consistent assignment, so the common case costs one check.
+/// The consistent assignments are found by a walk up the stack that closes
+/// each cluster as soon as both its ends are chosen and drops every branch
+/// whose closed clusters already break the contact law: the contact law of
+/// a cluster's stuck interfaces depends only on that cluster, and that of a
+/// slip only on the two clusters it separates. Where no assignment is
+/// consistent, the enumeration of all 3^k picks the least violating one.
 pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
+    let walk = Walk::new(sys, req);
+    let mut best: Option<(Key, Mode)> = None;
+    let mut count = 0u32;
+    walk.search(&mut |key, mode| {
+        count += 1;
+        if best.is_none_or(|(b, _)| key < b) {
+            best = Some((key, *mode));
+        }
+    });
+    match best {
+        Some((_, mode)) => Resolved {
+            mode,
+            consistent: true,
+            ambiguous: count > 1 && !walk.all_equal_friction(),
+        },
+        None => resolve_by_enumeration(sys, req),
+    }
+}
+
+/// Rank of a consistent assignment under the selection rule (smaller wins):
+/// a stuck interface of `must_break`, minus the stuck count, minus the kept
+/// count, then the enumeration order (stuck set, then slip directions, as
+/// bits over the interfaces in `zero` from the bottom).
+type Key = (bool, i32, i32, u32, u32);
+
+/// The walk of [`resolve`] over the interfaces in `zero`.
+struct Walk<'a> {
+    sys: &'a System,
+    req: &'a ResolveRequest,
+    /// Position in the list of interfaces in `zero` (bit index) of each
+    /// interface, or `usize::MAX` for the others (their contact is kept).
+    index: [usize; MAX_BODIES],
+}
+
+/// A cluster being built: its bottom body, its mass so far, and the
+/// absolute acceleration of the closed cluster below it.
+#[derive(Clone, Copy)]
+struct Open {
+    bottom: usize,
+    accel_below: f64,
+}
+
+impl<'a> Walk<'a> {
+    fn new(sys: &'a System, req: &'a ResolveRequest) -> Walk<'a> {
+        let mut index = [usize::MAX; MAX_BODIES];
+        let mut k = 0;
+        for (j, slot) in index.iter_mut().enumerate().take(sys.n + 1).skip(1) {
+            if req.zero & (1 << j) != 0 && !sys.is_free(j) {
+                *slot = k;
+                k += 1;
+            }
+        }
+        Walk { sys, req, index }
+    }
+
+    fn all_equal_friction(&self) -> bool {
+        (1..=self.sys.n)
+            .filter(|&j| self.index[j] != usize::MAX)
+            .all(|j| self.sys.mus[j] == self.sys.muk[j])
+    }
+
+    /// Calls `found` with the key and mode of every consistent assignment.
+    fn search(&self, found: &mut impl FnMut(Key, &Mode)) {
+        let mut mode = self.req.mode;
+        let open = Open {
+            bottom: 0,
+            accel_below: 0.0,
+        };
+        self.choose(1, open, &mut mode, found);
+    }
+
+    /// Chooses the contact of interface `j` (kept where it is not in
+    /// `zero`); a stuck one extends the open cluster, any other closes it.
+    fn choose(&self, j: usize, open: Open, mode: &mut Mode, found: &mut impl FnMut(Key, &Mode)) {
+        let n = self.sys.n;
+        if j > n {
+            if self.close(open, n + 1, mode).is_some() {
+                found(self.key(mode), mode);
+            }
+            return;
+        }
+        let options: &[Contact] = if self.index[j] == usize::MAX {
+            &[]
+        } else {
+            &[Contact::Stuck, Contact::SlipForward, Contact::SlipBackward]
+        };
+        let kept = [self.req.mode.contact[j]];
+        let options = if options.is_empty() {
+            &kept[..]
+        } else {
+            options
+        };
+        for &c in options {
+            mode.contact[j] = c;
+            if c == Contact::Stuck {
+                self.choose(j + 1, open, mode, found);
+            } else if let Some(accel) = self.close(open, j, mode) {
+                let next = Open {
+                    bottom: j,
+                    accel_below: accel,
+                };
+                self.choose(j + 1, next, mode, found);
+            }
+        }
+        mode.contact[j] = self.req.mode.contact[j];
+    }
+
+    /// Closes the cluster from `open.bottom` to body `end - 1` (interface
+    /// `end` above it slips, is free, or is the top of the stack): its
+    /// absolute acceleration if its stuck interfaces and the slip at its
+    /// bottom satisfy the contact law, `None` otherwise. The arithmetic is
+    /// that of [`Dynamics::clusters`] and [`violation`], operation for
+    /// operation, so that a walk and the enumeration decide alike.
+    fn close(&self, open: Open, end: usize, mode: &Mode) -> Option<f64> {
+        let (sys, a) = (self.sys, open.bottom);
+        let slip_force = |j: usize| -sys.muk[j] * sys.normal[j] * mode.contact[j].slip_sign();
+        let mut mass = 0.0;
+        for i in a..end {
+            mass += sys.mass[i];
+        }
+        let mut load = 0.0;
+        if a >= 1 {
+            load += slip_force(a);
+        }
+        let f_top = if end <= sys.n { slip_force(end) } else { 0.0 };
+        if end <= sys.n {
+            load -= f_top;
+        }
+        let accel = if a == 0 {
+            (load + self.req.load0) * (1.0 / mass)
+        } else {
+            load / mass
+        };
+        // The slip at the cluster's bottom, against the cluster below.
+        if a >= 1 && self.index[a] != usize::MAX {
+            let v = -mode.contact[a].slip_sign() * (accel - open.accel_below) / sys.g;
+            if v > CONSISTENCY_TOL {
+                return None;
+            }
+        }
+        // The stuck interfaces inside it, from the top down.
+        let mut above = 0.0;
+        for i in (a..end).rev() {
+            above += sys.mass[i];
+            if i > a && self.index[i] != usize::MAX {
+                let limit = sys.mus[i] * sys.normal[i];
+                let force = above * accel + f_top;
+                if (force.abs() - limit) / limit > CONSISTENCY_TOL {
+                    return None;
+                }
+            }
+        }
+        Some(accel)
+    }
+
+    fn key(&self, mode: &Mode) -> Key {
+        let (mut stuck_bits, mut signs, mut stuck_ifaces, mut s) = (0u32, 0u32, 0u32, 0);
+        for j in 1..=self.sys.n {
+            let k = self.index[j];
+            if k == usize::MAX {
+                continue;
+            }
+            match mode.contact[j] {
+                Contact::Stuck => {
+                    stuck_bits |= 1 << k;
+                    stuck_ifaces |= 1 << j;
+                }
+                c => {
+                    if c == Contact::SlipBackward {
+                        signs |= 1 << s;
+                    }
+                    s += 1;
+                }
+            }
+        }
+        (
+            stuck_ifaces & self.req.must_break != 0,
+            -(stuck_bits.count_ones() as i32),
+            -((stuck_ifaces & self.req.was_stuck).count_ones() as i32),
+            stuck_bits,
+            signs,
+        )
+    }
+}
+
+/// [`resolve`] by enumerating every assignment, from the largest stick set
+/// down: the selection rule's order written out, and the least violating
+/// assignment where none is consistent.
+pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
     let mut zero_list = [0usize; MAX_BODIES];
     let mut k = 0;
     for j in 1..=sys.n {
@@ -419,6 +615,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
                 return Resolved {
                     mode,
                     consistent: true,
+                    ambiguous: consistent_count(sys, req) > 1,
                 };
             }
         }
@@ -426,13 +623,14 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     Resolved {
         mode: fallback.map_or(req.mode, |(_, m)| m),
         consistent: false,
+        ambiguous: false,
     }
 }
 
 /// Number of consistent assignments of the interfaces in `req.zero` (every
-/// stick / forward / backward combination), for statistics: more than one
-/// means the selection rule of [`resolve`] decided. Only mus > muk can make
-/// it exceed one, so the enumeration (3^k modes) is skipped otherwise.
+/// stick / forward / backward combination), by enumeration: the oracle of
+/// the tests. Only mus > muk can make it exceed one, so the enumeration
+/// (3^k modes) is skipped otherwise.
 pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
     let mut list = [0usize; MAX_BODIES];
     let mut k = 0;

@@ -572,6 +572,24 @@ pub fn graded_stack(n: usize) -> stacked_live_load::Params {
     p
 }
 
+/// Issue #21's tall stack with static above kinetic friction: eight blocks,
+/// Tp 0.6 s, alpha 0.12 at the bottom down to 0.04 at the top, mu from
+/// 0.3 / 0.25 at the bottom down to 0.1 / 0.08 at the top (linear).
+pub fn graded_stack_static_above_kinetic() -> stacked_live_load::Params {
+    let mut p = stacked_live_load::Params {
+        n_blocks: 8,
+        tp: 0.6,
+        ..Default::default()
+    };
+    for j in 0..8 {
+        let x = j as f64 / 7.0;
+        p.alpha[j] = 0.12 - 0.08 * x;
+        p.mus[j] = 0.3 - 0.2 * x;
+        p.muk[j] = 0.25 - 0.17 * x;
+    }
+    p
+}
+
 /// Median of timings.
 pub fn median(mut x: Vec<f64>) -> f64 {
     x.sort_by(|a, b| a.total_cmp(b));

@@ -148,7 +148,7 @@ impl Simulator {
             // Counted at switches only: the count tries all 3^k assignments,
             // too costly for the resolutions that keep the mode (a stuck
             // stack under a moving force re-resolves at every jump).
-            if res.consistent && req.zero != 0 && mode::consistent_count(&self.sys, &req) > 1 {
+            if res.ambiguous {
                 self.stats.ambiguous += 1;
             }
             self.stats.events += 1;
