@@ -191,13 +191,13 @@ fn run_case(case: &str) {
             record_refused(&file, &[":4: NPTS = 9000000 but the file has only"]);
         }
         "work_bound" => {
-            // Inside every range, but 1000 s at Tp = 1 ms needs 3e8 steps.
+            // Inside every range, but 1e4 s at Tp = 1 ms needs 1.3e8 substeps.
             let (mut inst, log, status) = init(|inst| {
                 set(inst, Id::Tp, 1e-3);
             });
             assert_eq!(status, Status::Ok);
             let started = Instant::now();
-            assert_eq!(inst.do_step(0.0, 1000.0), Status::Error);
+            assert_eq!(inst.do_step(0.0, 1e4), Status::Error);
             assert!(log.last().contains("internal steps"), "{}", log.last());
             assert!(log.last().contains("limit of 1e8"), "{}", log.last());
             assert!(started.elapsed() < Duration::from_secs(1));

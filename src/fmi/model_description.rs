@@ -22,7 +22,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
     let description =
         "Linear SDOF structure carrying a stack of up to 8 rigid blocks that stick or slide with \
-                       Coulomb friction, under ground acceleration; event-located RK4";
+                       Coulomb friction, under ground acceleration; exact stick/slip events";
     let tool = format!("stacked-live-load {}", env!("CARGO_PKG_VERSION"));
     let variables = table();
     w.create_element("fmiModelDescription")

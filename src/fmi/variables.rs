@@ -382,13 +382,13 @@ pub fn table() -> Vec<Variable> {
         Id::Solver,
         None,
         Some("1".to_string()),
-        "1: event-located RK4; 2: mode switches at step ends only (baseline); 3: tanh-regularized friction, plain RK4 (baseline)",
+        "1: exact (default): the exact motion of each stick/slip mode, switches located on it; 2: RK4 with mode switches at step ends only (the paper's method, baseline); 3: tanh-regularized friction, plain RK4 (baseline)",
     );
     add(
         Id::MaxStep,
         Some("Time"),
         real(0.0),
-        "Largest internal step; 0: automatic. Solver 3 uses it as its fixed step, with no stability bound",
+        "Largest internal step (s); 0: automatic. Solver 1 stays exact at any value (a smaller one only costs time); solver 2 uses it as its RK4 step within the stability bound; solver 3 as its fixed step, with no stability bound",
     );
     add(
         Id::FrictionEps,

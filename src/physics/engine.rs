@@ -1,9 +1,12 @@
-//! Time integration of the reduced system of the current mode: by default
-//! the exact map of each substep (RK4 folded to round-off) wherever a substep
-//! is proved free of switches and new peaks, and elsewhere the exact motion
-//! with stick/slip events located on its Taylor polynomials; with a positive
-//! `maxStep`, RK4 with events located inside the step (or, as a baseline,
-//! checked at step ends only); running peaks and the energy balance.
+//! Time integration of the reduced system of the current mode, and the
+//! running peaks and energy balance.
+//!
+//! The default (solver 1) is exact: each substep (`ω h <= 0.5`, or
+//! `maxStep` where shorter) goes on the exact map of the mode wherever it is
+//! proved free of switches and new peaks, and elsewhere on the exact
+//! motion's Taylor polynomials with the switch located on them. The RK4
+//! baseline (solver 2, the paper's method: switches at step ends) is the
+//! only RK4 left; the default never enters it.
 //!
 //! The state is kept per body (`u`, `v` relative to the support); a step
 //! packs one displacement and one velocity per cluster plus the energy
@@ -12,13 +15,14 @@
 //!
 //! This file holds the [`Simulator`] and its stepping loop; beside it:
 //! `pieces` (excitation pieces, step sizes), `exact_map` and `folded` (the
-//! default: substeps on the exact map, proved event- and peak-free), `samples`
-//! (the same over a record's samples read directly), `exact_events` (the
-//! default's other substeps: events on the exact motion), `lean`
-//! and `rk4_map` (the RK4 fast path of switch-free steps), `structure_rk4`
-//! (one RK4 step of the clusters), `events` (guards, location, resolution),
-//! `report` (outputs, counters, errors), `saved_state` and `state_check`
-//! (saved states and their validation).
+//! default's substeps on the exact map, proved event- and peak-free),
+//! `samples` (the same over a record's samples read directly), `upper` (the
+//! clusters above the structure's over a run of substeps), `exact_events`
+//! (the default's other substeps: events on the exact motion), `poly` (its
+//! polynomials), `structure_rk4` (the baseline's RK4 step), `events`
+//! (guards, firing, resolution, the baseline's step), `report` (outputs,
+//! counters, errors), `saved_state` and `state_check` (saved states and
+//! their validation).
 
 use crate::physics::hermite;
 use crate::physics::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
@@ -30,15 +34,14 @@ mod events;
 mod exact_events;
 mod exact_map;
 mod folded;
-mod lean;
 mod pieces;
 mod poly;
 mod report;
-mod rk4_map;
 mod samples;
 mod saved_state;
 mod state_check;
 mod structure_rk4;
+mod upper;
 
 use events::Segment;
 use pieces::Piece;
@@ -56,11 +59,14 @@ pub struct Simulator {
     params: Params,
     sys: System,
     settings: Settings,
+    /// Largest internal step: the exact default's longest substep, or the
+    /// step of the RK4 baseline (solver 2).
     h_max: f64,
-    /// The default method (automatic step, located events): substeps on the
-    /// exact map, the exact motion with located events where it cannot prove
-    /// a substep event-free (fine RK4 steps only if that cannot decide).
+    /// The exact default (solver 1): substeps on the exact map where they
+    /// are proved free of switches and new peaks, the exact motion with
+    /// switches located on it elsewhere.
     exact: bool,
+    /// Stretches of the exact motion where a substep cannot be decided.
     h_fine: f64,
     /// Exact maps in use (derived data only: rebuilt identically on demand).
     maps: exact_map::MapCache,
@@ -95,7 +101,7 @@ impl Simulator {
         let mut sim = Simulator {
             params: params.clone(),
             h_max: auto_step(settings, sys.omega_p),
-            exact: settings.method == Method::EventLocated && settings.max_step == 0.0,
+            exact: settings.method == Method::EventLocated,
             h_fine: (FINE_H_OMEGA / sys.omega_p).min(FINE_MAX_STEP),
             maps: exact_map::MapCache::default(),
             sys,
@@ -118,6 +124,9 @@ impl Simulator {
             first_switch: f64::NAN,
             stats: Stats::default(),
         };
+        if sim.exact {
+            sim.h_max = sim.map_step();
+        }
         sim.resolve_mode(0);
         sim.stats.events = 0;
         sim.last_event = f64::NAN;
@@ -248,7 +257,7 @@ impl Simulator {
         while let Some((t_end, exc)) = pending.take() {
             let mut piece = self.begin_piece(t_end, &exc)?;
             match self.settings.method {
-                Method::EventLocated if self.exact => loop {
+                Method::EventLocated => loop {
                     // Substeps proved event-free on the exact map; the one
                     // it cannot prove on the exact motion with events
                     // located on it.
@@ -257,16 +266,6 @@ impl Simulator {
                         break;
                     }
                     self.exact_substep(piece.end_of(piece.i), &piece);
-                    piece.i += 1;
-                },
-                Method::EventLocated => loop {
-                    // Runs of switch-free steps on the fast path; the step
-                    // where a guard fires with event location.
-                    pending = self.lean_steps(&mut piece, &mut pieces);
-                    if piece.i > piece.n {
-                        break;
-                    }
-                    self.step_located(piece.end_of(piece.i), &piece.exc, piece.t_ref);
                     piece.i += 1;
                 },
                 Method::StepEnd => {
@@ -313,29 +312,6 @@ impl Simulator {
             self.h_max
         };
         Ok(Piece::new(self.t, t_end, exc, h))
-    }
-
-    /// From now to `t_end` within `piece` by RK4 steps of at most `h_fine`
-    /// with located events (the RK4 fast path between events).
-    fn fine_steps(&mut self, t_end: f64, piece: &Piece) {
-        let e = &piece.exc;
-        let dt = self.t - piece.t_ref;
-        let exc = Excitation {
-            ag: e.ag + e.ag_rate * dt,
-            ag_rate: e.ag_rate,
-            fext: e.fext + e.fext_rate * dt,
-            fext_rate: e.fext_rate,
-        };
-        let mut sub = Piece::new(self.t, t_end, &exc, self.h_fine);
-        let mut none = std::iter::empty();
-        loop {
-            self.lean_steps(&mut sub, &mut none);
-            if sub.i > sub.n {
-                break;
-            }
-            self.step_located(sub.end_of(sub.i), &sub.exc, sub.t_ref);
-            sub.i += 1;
-        }
     }
 
     /// The inputs at the end of a finished piece.
@@ -510,18 +486,56 @@ mod tests {
 
     #[test]
     fn internal_step_respects_both_bounds() {
+        // The exact default: substeps of omega h = MAP_H_OMEGA, or maxStep
+        // where shorter; the RK4 baseline (solver 2): the automatic step,
+        // maxStep bounded by the stability limit STABLE_H_OMEGA / omega.
         let p = Params::default();
         let omega = 2.0 * std::f64::consts::PI / p.tp;
         let auto = Simulator::new(&p, &Settings::default()).unwrap();
+        assert_eq!(auto.max_internal_step(), 0.5 / omega);
+        for (max_step, expected) in [(1e-4, 1e-4), (10.0, 0.5 / omega)] {
+            let s = Settings {
+                max_step,
+                ..Settings::default()
+            };
+            let sim = Simulator::new(&p, &s).unwrap();
+            assert_eq!(sim.max_internal_step(), expected);
+        }
+        let baseline = |max_step| Settings {
+            method: Method::StepEnd,
+            max_step,
+        };
+        let sim = Simulator::new(&p, &baseline(0.0)).unwrap();
         assert_eq!(
-            auto.max_internal_step(),
+            sim.max_internal_step(),
             (ACCURATE_H_OMEGA / omega).min(ACCURATE_MAX_STEP)
         );
-        let coarse = Settings {
-            max_step: 10.0,
-            ..Settings::default()
-        };
-        let sim = Simulator::new(&p, &coarse).unwrap();
+        let sim = Simulator::new(&p, &baseline(10.0)).unwrap();
         assert_eq!(sim.max_internal_step(), STABLE_H_OMEGA / omega);
+    }
+
+    #[test]
+    fn the_default_is_exact_at_any_max_step() {
+        // maxStep only shortens the exact default's substeps: the same
+        // motion to rounding (expected: equal within 1e-11 of the peak).
+        let exc = Excitation {
+            ag: 4.0,
+            ag_rate: -25.0,
+            fext: 300.0,
+            fext_rate: -2000.0,
+        };
+        let run = |max_step| {
+            let s = Settings {
+                max_step,
+                ..Settings::default()
+            };
+            let mut sim = Simulator::new(&Params::default(), &s).unwrap();
+            sim.advance(0.4, &exc).unwrap();
+            sim.outputs()
+        };
+        let (a, b) = (run(0.0), run(3e-4));
+        assert!(a.n_events > 0);
+        assert!((a.up - b.up).abs() < 1e-11 * a.peak_up, "{} {}", a.up, b.up);
+        assert!((a.peak_slip[0] - b.peak_slip[0]).abs() < 1e-11 * a.peak_up);
     }
 }

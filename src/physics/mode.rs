@@ -90,6 +90,27 @@ pub enum Guard {
     },
 }
 
+/// A band of the structure's absolute acceleration inside which every
+/// stuck guard of `guards` is positive by a margin far above rounding: the
+/// stick `|mass_above A + f_top| <= cap` solved for A and shrunk by 1e-12
+/// of its scale.
+pub fn safe_accel_band(guards: &[Guard]) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    for g in guards {
+        if let Guard::Stuck {
+            mass_above,
+            f_top,
+            cap,
+        } = *g
+        {
+            let margin = 1e-12 * (cap + f_top.abs()) / mass_above;
+            lo = lo.max((-cap - f_top) / mass_above + margin);
+            hi = hi.min((cap - f_top) / mass_above - margin);
+        }
+    }
+    (lo, hi)
+}
+
 /// An interface between two clusters (its slip changes in the mode).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Moving {
@@ -722,5 +743,35 @@ mod tests {
         let expected = -sys.muk[2] * sys.normal[2];
         assert_eq!(d.slip_load[1], expected);
         assert_eq!(d.slip_load[0], -expected);
+    }
+}
+
+#[cfg(test)]
+mod band_tests {
+    use super::*;
+    use crate::physics::params::Params;
+
+    #[test]
+    fn the_stick_band_is_inside_every_stick() {
+        // Expected: at the band's edges every stuck guard is still positive,
+        // and just beyond them (1e-9 relative) one is negative.
+        let sys = System::new(&Params::default()).unwrap();
+        let d = Dynamics::new(&sys, &Mode::all_stuck(&sys));
+        let guards = &d.guards[..d.n_guards];
+        assert_eq!(guards.len(), 2);
+        let fires = |a: f64| {
+            guards.iter().any(|g| match *g {
+                Guard::Stuck {
+                    mass_above,
+                    f_top,
+                    cap,
+                } => cap - (mass_above * a + f_top).abs() < 0.0,
+                Guard::Slip { .. } => false,
+            })
+        };
+        let (lo, hi) = safe_accel_band(guards);
+        assert!(lo < 0.0 && hi > 0.0);
+        assert!(!fires(lo) && !fires(hi));
+        assert!(fires(hi * (1.0 + 1e-9)) && fires(lo * (1.0 + 1e-9)));
     }
 }

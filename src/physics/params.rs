@@ -171,8 +171,8 @@ impl Params {
 /// How mode switches are handled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
-    /// Guards are root-found inside each RK4 step and the mode switches at the
-    /// located instant (4th order through switches). The default.
+    /// The exact default: the exact motion of each mode, every switch
+    /// located on it (docs/model-and-numerics.md, "Method").
     EventLocated,
     /// Guards are checked only at internal step ends, as in the paper
     /// (first order at every switch). A baseline for comparisons.
@@ -184,9 +184,11 @@ pub enum Method {
 pub struct Settings {
     /// How mode switches are handled.
     pub method: Method,
-    /// Largest internal step (s). 0 selects the automatic accuracy bound
-    /// (see [`crate::physics::engine::auto_step`]); a positive value replaces it, but
-    /// the RK4 stability bound of the bare structure always applies.
+    /// Largest internal step (s); 0: automatic. The exact default stays
+    /// exact at any value (a shorter substep only costs time); for the RK4
+    /// baseline it replaces the automatic accuracy bound
+    /// ([`crate::physics::engine::auto_step`]) within the RK4 stability bound
+    /// of the bare structure.
     pub max_step: f64,
 }
 

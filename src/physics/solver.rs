@@ -74,9 +74,9 @@ impl Stepper for RegularizedSimulator {
 /// The `solver` choice.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SolverKind {
-    /// 1: RK4 with events located inside the step (the default).
+    /// 1: the exact engine, switches located on the exact motion (the default).
     EventLocated,
-    /// 2: RK4 switching modes at step ends only (the paper's approach).
+    /// 2: RK4 switching modes at step ends only (the paper's approach; a baseline).
     StepEnd,
     /// 3: friction regularized as `tanh(v / frictionEps)`, plain RK4.
     Regularized,

@@ -1,6 +1,6 @@
-//! Stick/slip events: the guards of a step's segment, their location by
-//! Illinois iteration on RK4 re-steps, firing a contact and resolving the
-//! mode, and the located and step-end switching steps.
+//! Stick/slip events: the guards of a step's segment, firing a contact and
+//! resolving the mode (for every path), and the step-end switching step of
+//! the RK4 baseline (solver 2).
 
 use super::*;
 
@@ -68,48 +68,6 @@ impl Segment<'_> {
             }
             Contact::Free => f64::INFINITY,
         }
-    }
-
-    /// Guard j after `theta h`, re-stepping RK4 from the step start.
-    pub(super) fn guard_at(&self, j: usize, theta: f64, h: f64) -> f64 {
-        self.guard(j, &self.structure_after(theta * h), theta * h)
-    }
-
-    /// Instant (as a fraction of `h`) where guard j crosses zero, bracketed
-    /// between `a` (guard > 0) and `b` (guard <= 0); returns the right end of
-    /// the final bracket, where the guard has already changed sign. Illinois
-    /// iteration on RK4 re-steps from the step start.
-    pub(super) fn locate(&self, j: usize, h: f64, bracket: [(f64, f64); 2]) -> f64 {
-        let [(mut a, mut ga), (mut b, mut gb)] = bracket;
-        let tol = EVENT_TIME_TOL / h;
-        let mut side = 0i8;
-        for iter in 0..200 {
-            if b - a <= tol {
-                break;
-            }
-            let mut c = (a * gb - b * ga) / (gb - ga);
-            // Fall back to bisection when the secant stalls or leaves the bracket.
-            if !(c > a && c < b) || iter >= 60 {
-                c = 0.5 * (a + b);
-            }
-            let gc = self.guard_at(j, c, h);
-            if gc > 0.0 {
-                a = c;
-                ga = gc;
-                if side == 1 {
-                    gb *= 0.5;
-                }
-                side = 1;
-            } else {
-                b = c;
-                gb = gc;
-                if side == -1 {
-                    ga *= 0.5;
-                }
-                side = -1;
-            }
-        }
-        b
     }
 }
 
@@ -246,85 +204,6 @@ impl Simulator {
         } else {
             false
         }
-    }
-
-    /// One internal step to `t1` with events located inside it.
-    ///
-    /// Chatter guard: a guard that is violated from the very start of a
-    /// segment (no positive value inside it) fires at once, as a zero-length
-    /// event; this settles degenerate contacts, such as a block "slipping"
-    /// with exactly zero relative acceleration on an equal-friction stack. If
-    /// the same interface does it again within the step, its guard is muted
-    /// and switched at the step end; so are all guards after
-    /// `MAX_EVENTS_PER_STEP` events in one step.
-    pub(super) fn step_located(&mut self, t1: f64, exc: &Excitation, t_ref: f64) {
-        let mut muted: u32 = 0;
-        let mut fired_at_once: u32 = 0;
-        let mut events = 0;
-        while self.t < t1 {
-            let t0 = self.t;
-            let h = t1 - t0;
-            let mut at_once: u32 = 0;
-            let (x1, earliest) = {
-                let seg = self.segment(exc, t_ref);
-                let (x0, x1) = (seg.start(), seg.structure_after(h));
-                let mut earliest: Option<(f64, usize)> = None;
-                let mut candidates = self.dynamics.changing_guards & !muted;
-                while candidates != 0 {
-                    let j = candidates.trailing_zeros() as usize;
-                    candidates &= candidates - 1;
-                    let g1 = seg.guard(j, &x1, h);
-                    if g1 >= 0.0 {
-                        continue;
-                    }
-                    let g0 = seg.guard(j, &x0, 0.0);
-                    let start = if g0 > 0.0 {
-                        Some((0.0, g0))
-                    } else {
-                        // The guard starts at zero (a contact that has just
-                        // switched): bracket from the first positive sample.
-                        (1..=6)
-                            .map(|k| 0.5f64.powi(k))
-                            .map(|th| (th, seg.guard_at(j, th, h)))
-                            .find(|&(_, g)| g > 0.0)
-                    };
-                    match start {
-                        Some(a) => {
-                            let th = seg.locate(j, h, [a, (1.0, g1)]);
-                            if earliest.is_none_or(|(e, _)| th < e) {
-                                earliest = Some((th, j));
-                            }
-                        }
-                        None if fired_at_once & (1 << j) == 0 => at_once |= 1 << j,
-                        None => muted |= 1 << j,
-                    }
-                }
-                (x1, earliest)
-            };
-            if at_once != 0 {
-                fired_at_once |= at_once;
-                self.fire_violated(exc, t_ref, 0, at_once);
-                continue;
-            }
-            match earliest {
-                None => {
-                    self.accept(&x1, h, exc, t_ref);
-                    self.t = t1;
-                }
-                Some((theta, located)) => {
-                    // The located guard fires whatever its sign after
-                    // rounding; others fire if they have reached zero too.
-                    let h_event = theta * h;
-                    let xe = self.segment(exc, t_ref).structure_after(h_event);
-                    self.accept(&xe, h_event, exc, t_ref);
-                    if theta >= 1.0 {
-                        self.t = t1;
-                    }
-                    self.fire_located(exc, t_ref, located, &mut muted, &mut events);
-                }
-            }
-        }
-        self.fire_muted(exc, t_ref, muted);
     }
 
     /// Fires the located guard `j` whatever its sign after rounding, and

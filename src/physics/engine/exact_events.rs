@@ -24,8 +24,10 @@
 //! chatter guards of `Simulator::step_located` are kept: a guard violated
 //! from the start fires at once (a zero-length event), and every guard is
 //! muted after `MAX_EVENTS_PER_STEP` events; an interface that fires at once
-//! twice in the substep hands its rest to fine RK4 steps, which mute it for
-//! one fine step only.
+//! twice in the substep, or a search that cannot decide within its budget,
+//! hands the rest of the substep to fine stretches of the same exact motion
+//! (`ω h <= 0.01`), where the contact is muted for one stretch only and an
+//! undecided search halves the stretch.
 
 use super::exact_map::degree;
 use super::poly::*;
@@ -224,6 +226,27 @@ impl Flow {
     }
 }
 
+/// Halvings of a fine stretch that cannot be decided before its guards are
+/// muted and its peaks taken at its ends (a stretch of `h_fine / 4096`).
+const MAX_SPLIT_DEPTH: u32 = 12;
+
+/// [`raise_peak_exact`], or the ends only (`ends_only`: a stretch at the
+/// deepest split).
+fn raise_peak_over(
+    peak: &mut f64,
+    y: &Poly,
+    ends: [f64; 2],
+    s: f64,
+    tol: f64,
+    ends_only: bool,
+) -> Result<(), Undecided> {
+    if ends_only {
+        *peak = peak.max(y.c[0].abs()).max(ends[0].abs());
+        return Ok(());
+    }
+    raise_peak_exact(peak, y, ends, s, tol)
+}
+
 /// What the search of a stretch found.
 enum Next {
     /// Guards violated from the start with no positive stretch after it.
@@ -235,11 +258,21 @@ enum Next {
 
 impl Simulator {
     /// The rest of the current substep, to `t1` within `piece`, on the exact
-    /// motion with switches located on it (see the module's text); a stretch
-    /// whose guards or peaks cannot be decided within the budget goes to
-    /// fine RK4 steps.
+    /// motion with switches located on it (see the module's text).
     pub(super) fn exact_substep(&mut self, t1: f64, piece: &Piece) {
+        self.exact_stretch(t1, piece, 0);
+    }
+
+    /// The motion to `t1`: the rest of a substep (`depth` 0) or a shorter
+    /// stretch of it (`depth` >= 1). A substep that cannot be decided (a
+    /// search over its budget, a contact that chatters) goes on in fine
+    /// stretches of at most `h_fine`; in those a chattering contact is muted
+    /// for the rest of the stretch (switched at its end), and a search that
+    /// cannot decide halves the stretch, down to `MAX_SPLIT_DEPTH` halvings,
+    /// where the guards are muted and the peaks taken at the stretch's ends.
+    fn exact_stretch(&mut self, t1: f64, piece: &Piece, depth: u32) {
         let (exc, t_ref) = (&piece.exc, piece.t_ref);
+        let ends_only = depth >= MAX_SPLIT_DEPTH;
         let mut muted: u32 = 0;
         let mut fired_at_once: u32 = 0;
         let mut events = 0;
@@ -254,42 +287,68 @@ impl Simulator {
             let tol = EVENT_TIME_TOL / h;
             let next = match self.next_event(&flow, muted, tol) {
                 Ok(next) => next,
-                Err(Undecided) => return self.fine_steps(t1, piece),
+                Err(Undecided) if depth == 0 => return self.fine_stretches(t1, piece),
+                Err(Undecided) if !ends_only => return self.split_stretch(t1, piece, depth),
+                Err(Undecided) => {
+                    muted |= self.dynamics.changing_guards;
+                    continue;
+                }
             };
             match next {
                 Next::AtOnce(at_once) => {
-                    // Fired once already in this substep: a contact that
-                    // chatters (a degenerate stack, such as equal friction
-                    // above and below a block). The rest of the substep goes
-                    // to fine RK4 steps, whose chatter guard mutes it for
-                    // one fine step, not for the whole substep.
-                    if at_once & fired_at_once != 0 {
-                        return self.fine_steps(t1, piece);
+                    // Fired once already: a contact that chatters (a
+                    // degenerate stack, such as equal friction above and
+                    // below a block), muted for a fine stretch only.
+                    let again = at_once & fired_at_once;
+                    if again != 0 && depth == 0 {
+                        return self.fine_stretches(t1, piece);
                     }
+                    muted |= again;
                     let fire = at_once & !fired_at_once;
                     fired_at_once |= fire;
                     if fire != 0 {
                         self.fire_violated(exc, t_ref, 0, fire);
                     }
                 }
-                Next::Event(None) => {
-                    if self.take_exact(&flow, 1.0, tol, muted).is_err() {
-                        return self.fine_steps(t1, piece);
-                    }
-                    self.t = t1;
-                }
-                Next::Event(Some((s, j))) => {
-                    if self.take_exact(&flow, s, tol, muted).is_err() {
-                        return self.fine_steps(t1, piece);
+                Next::Event(event) => {
+                    let s = event.map_or(1.0, |(s, _)| s);
+                    if self.take_exact(&flow, s, tol, muted, ends_only).is_err() {
+                        if depth == 0 {
+                            return self.fine_stretches(t1, piece);
+                        }
+                        return self.split_stretch(t1, piece, depth);
                     }
                     if s >= 1.0 {
                         self.t = t1;
                     }
-                    self.fire_located(exc, t_ref, j, &mut muted, &mut events);
+                    if let Some((_, j)) = event {
+                        self.fire_located(exc, t_ref, j, &mut muted, &mut events);
+                    }
                 }
             }
         }
         self.fire_muted(exc, t_ref, muted);
+    }
+
+    /// The rest of a substep to `t1` in equal stretches of at most `h_fine`.
+    fn fine_stretches(&mut self, t1: f64, piece: &Piece) {
+        let t0 = self.t;
+        let n = substeps(t1 - t0, self.h_fine) as usize;
+        for i in 1..=n {
+            let end = if i == n {
+                t1
+            } else {
+                t0 + (t1 - t0) * i as f64 / n as f64
+            };
+            self.exact_stretch(end, piece, 1);
+        }
+    }
+
+    /// The stretch to `t1` in two halves, one level deeper.
+    fn split_stretch(&mut self, t1: f64, piece: &Piece, depth: u32) {
+        let mid = self.t + 0.5 * (t1 - self.t);
+        self.exact_stretch(mid, piece, depth + 1);
+        self.exact_stretch(t1, piece, depth + 1);
     }
 
     /// The first zero over the stretch of `flow` among the guards of the
@@ -342,7 +401,14 @@ impl Simulator {
     /// cluster, the work terms are added in closed form, and the peaks are
     /// raised to their largest values over it. Fails, changing nothing, when
     /// a peak cannot be decided.
-    fn take_exact(&mut self, flow: &Flow, s: f64, tol: f64, muted: u32) -> Result<(), Undecided> {
+    fn take_exact(
+        &mut self,
+        flow: &Flow,
+        s: f64,
+        tol: f64,
+        muted: u32,
+        ends_only: bool,
+    ) -> Result<(), Undecided> {
         let n = self.sys.n;
         let d = &self.dynamics;
         let tau = if s >= 1.0 { flow.h } else { s * flow.h };
@@ -357,12 +423,26 @@ impl Simulator {
         // cubic through the ends is exact.
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let peak_tol = tol.max(PEAK_TOL);
-        raise_peak_exact(&mut peak_u0, &flow.u, [u0, flow.u_spread], s, peak_tol)?;
+        raise_peak_over(
+            &mut peak_u0,
+            &flow.u,
+            [u0, flow.u_spread],
+            s,
+            peak_tol,
+            ends_only,
+        )?;
         let a_start = flow.accel_start;
         peak_a0 = peak_a0.max(a_start.abs()).max(accel_end.abs());
         if a_start.abs() + flow.accel_spread_bound > peak_a0 {
             let (accel, spread) = flow.accel();
-            raise_peak_exact(&mut peak_a0, accel, [accel_end, *spread], s, peak_tol)?;
+            raise_peak_over(
+                &mut peak_a0,
+                accel,
+                [accel_end, *spread],
+                s,
+                peak_tol,
+                ends_only,
+            )?;
         }
         let mut peak_slip = self.peak_slip;
         let (mut du, mut v_end) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
@@ -402,7 +482,8 @@ impl Simulator {
                         c[k + 1] += upper[k];
                     }
                     let slip = Poly::new(c, flow.u.deg.max(3));
-                    raise_peak_exact(&mut peak_slip[j], &slip, [slip1, spread], s, peak_tol)?;
+                    let ends = [slip1, spread];
+                    raise_peak_over(&mut peak_slip[j], &slip, ends, s, peak_tol, ends_only)?;
                 }
             } else {
                 let (vrel0, vrel1) = (self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]);

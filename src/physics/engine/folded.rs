@@ -22,9 +22,10 @@
 //! state, `∫ u` and the inputs.
 
 use super::exact_map::{canonical_length, dot, ExactMap, MAP_H_OMEGA};
-use super::lean::{safe_accel_band, UpperClusters};
+use super::upper::UpperClusters;
 use super::{Excitation, Piece, Simulator};
 use crate::physics::hermite;
+use crate::physics::mode::safe_accel_band;
 use crate::physics::mode::{Dynamics, Guard};
 use crate::physics::params::MAX_BODIES;
 
@@ -289,8 +290,33 @@ impl Simulator {
     }
 
     /// Largest substep on the exact map.
+    /// Ends a run of `taken` steps at `t`: adds its input and viscous work,
+    /// sets the structure's peaks (|u0|, |A0|).
+    pub(super) fn end_run(
+        &mut self,
+        t: f64,
+        taken: u64,
+        [input, viscous]: [f64; 2],
+        [u0, a0]: [f64; 2],
+    ) {
+        self.e_input += input;
+        self.e_viscous += viscous;
+        self.peak_u0 = u0;
+        self.peak_a0 = a0;
+        self.t = t;
+        self.stats.steps += taken;
+    }
+
+    /// The longest substep of the exact default: `ω h = MAP_H_OMEGA`, or
+    /// `maxStep` where that is shorter (the default stays exact at any
+    /// `maxStep`; a shorter one only costs more substeps).
     pub(super) fn map_step(&self) -> f64 {
-        MAP_H_OMEGA / self.sys.omega_p
+        let h = MAP_H_OMEGA / self.sys.omega_p;
+        if self.settings.max_step > 0.0 {
+            h.min(self.settings.max_step)
+        } else {
+            h
+        }
     }
 
     fn folded_one_cluster(

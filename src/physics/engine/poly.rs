@@ -13,7 +13,7 @@ pub(super) const N_COEF: usize = 24;
 
 /// Evaluations [`first_zero`] may spend on one guard before it gives up
 /// (a guard hovering at rounding level over the substep); the substep is
-/// then taken by fine RK4 steps (`Simulator::fine_steps`).
+/// then taken in fine stretches of the exact motion (`exact_events`).
 const EVALUATION_BUDGET: u32 = 400;
 
 /// Width (fraction of a stretch) to which a peak's critical point is

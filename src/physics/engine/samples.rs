@@ -19,10 +19,9 @@
 use super::exact_events::raise_substep_peaks;
 use super::exact_map::{dot, ExactMap};
 use super::folded::{in_band_proved, raise_peak_proved, slip_guard_proved, structure_peaks_proved};
-use super::lean::safe_accel_band;
 use super::{move_bodies, Excitation, SimError, Simulator};
 use crate::physics::hermite;
-use crate::physics::mode::Guard;
+use crate::physics::mode::{safe_accel_band, Guard};
 use crate::physics::params::MAX_BODIES;
 
 /// Whole samples of a record, from the simulator's current time
