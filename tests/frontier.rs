@@ -185,15 +185,16 @@ fn a_whole_record_in_one_call_is_exact() {
 }
 
 #[test]
-fn the_sample_path_and_the_piece_path_agree() {
-    // Two independent ways through a record: the loop over its samples
-    // (`record::advance_with_record` with held inputs) and the general path
-    // fed one linear piece per sample interval (`Simulator::advance_pieces`),
-    // on random scenes of 0 to 8 blocks with a held external force, a held
-    // ground acceleration added to the record and a record scale, in steps
-    // of random length (communication points between samples). Both are
-    // exact to round-off: expected agreement within 1e-10 of the peaks and
-    // of the input energy (states, peaks, energies, switch counts alike).
+fn a_record_in_random_steps_equals_its_pieces_in_one_call() {
+    // The one driver fed two ways: the record through
+    // `record::advance_with_record` in steps of random length (communication
+    // points between samples, partial pieces at both ends of each step), and
+    // one linear piece per sample interval in a single
+    // `Simulator::advance_pieces`, on random scenes of 0 to 8 blocks with a
+    // held external force, a held ground acceleration added to the record
+    // and a record scale. Both are exact to round-off: expected agreement
+    // within 1e-10 of the peaks and of the input energy (states, peaks,
+    // energies alike).
     let seed = seed() ^ 0x9a7e;
     let mut rng = Rng(seed);
     for case in 0..12 {

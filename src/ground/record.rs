@@ -5,7 +5,7 @@
 //! A record is a table of samples; between samples the acceleration is
 //! linear, before the first and after the last it is zero.
 
-use crate::physics::engine::{Excitation, Samples, SimError};
+use crate::physics::engine::{Excitation, SimError};
 use crate::physics::solver::Stepper;
 use std::fmt;
 
@@ -114,81 +114,82 @@ pub fn advance_with_record<S: Stepper>(
     scale: f64,
     extra: &Excitation,
 ) -> Result<(), SimError> {
-    if sim.takes_samples(extra) && t_end > sim.time() && record.time.len() >= 2 {
-        return advance_by_samples(sim, t_end, record, scale, extra);
-    }
-    advance_by_pieces(sim, t_end, record, scale, extra)
-}
-
-/// As [`advance_with_record`], one linear piece per sample interval.
-fn advance_by_pieces<S: Stepper>(
-    sim: &mut S,
-    t_end: f64,
-    record: &GroundMotion,
-    scale: f64,
-    extra: &Excitation,
-) -> Result<(), SimError> {
-    let t_start = sim.time();
-    let mut t = t_start;
-    let mut done = false;
-    // First sample after `t`, carried from piece to piece.
-    let mut next_sample = record.first_after(t);
-    let pieces = std::iter::from_fn(move || {
-        if done {
-            return None;
-        }
-        while next_sample < record.time.len() && record.time[next_sample] <= t {
-            next_sample += 1;
-        }
-        let (a, slope, piece_end) = record.piece_before(next_sample, t);
-        let t1 = piece_end.min(t_end);
-        let dt = t - t_start;
-        let exc = Excitation {
-            ag: scale * a + extra.ag + extra.ag_rate * dt,
-            ag_rate: scale * slope + extra.ag_rate,
-            fext: extra.fext + extra.fext_rate * dt,
-            fext_rate: extra.fext_rate,
-        };
-        t = t1;
-        done = t1 >= t_end;
-        Some((t1, exc))
-    });
+    let t = sim.time();
+    let dt = if record.time.len() >= 2 {
+        record.time[1] - record.time[0]
+    } else {
+        f64::INFINITY
+    };
+    let pieces = RecordPieces {
+        dt,
+        inv_dt: 1.0 / dt,
+        record,
+        scale,
+        extra: *extra,
+        t_start: t,
+        t,
+        t_end,
+        next_sample: record.first_after(t),
+        done: false,
+    };
     sim.advance_pieces(pieces)
 }
 
-/// As [`advance_with_record`] for a stepper with a path of its own for
-/// whole samples (held inputs): the samples from one at the current time to
-/// the last before `t_end` go to it in one call, the partial intervals at
-/// either end to [`advance_by_pieces`].
-fn advance_by_samples<S: Stepper>(
-    sim: &mut S,
-    t_end: f64,
-    record: &GroundMotion,
+/// The linear pieces of `scale * record + extra` from `t` to `t_end`, one
+/// per sample interval (the first and last may be partial).
+struct RecordPieces<'a> {
+    record: &'a GroundMotion,
+    /// The record's first interval and its reciprocal: an interval as long
+    /// up to the rounding of its times takes its slope by a product (a
+    /// division per sample would sit on the engine's critical path).
+    dt: f64,
+    inv_dt: f64,
     scale: f64,
-    extra: &Excitation,
-) -> Result<(), SimError> {
-    let n = record.time.len();
-    let dt = record.time[1] - record.time[0];
-    loop {
-        let t = sim.time();
-        if t >= t_end {
-            return Ok(());
+    extra: Excitation,
+    t_start: f64,
+    t: f64,
+    t_end: f64,
+    /// First sample after `t`.
+    next_sample: usize,
+    done: bool,
+}
+
+impl Iterator for RecordPieces<'_> {
+    type Item = (f64, Excitation);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(f64, Excitation)> {
+        if self.done {
+            return None;
         }
-        let i = record.first_after(t);
-        if i >= 1 && i < n && record.time[i - 1] == t && record.time[i] <= t_end {
-            let last = record.time.partition_point(|&x| x <= t_end) - 1;
-            sim.advance_samples(&Samples {
-                time: &record.time[i - 1..=last],
-                accel: &record.accel[i - 1..=last],
-                scale,
-                ag_offset: extra.ag,
-                fext: extra.fext,
-                dt,
-            })?;
-            continue;
+        let (time, accel, i) = (&self.record.time, &self.record.accel, self.next_sample);
+        let (a, slope, piece_end) = if i >= 1 && i < time.len() && time[i - 1] == self.t {
+            // A whole sample interval from its first sample (the usual case).
+            let (t0, t1) = (time[i - 1], time[i]);
+            let rise = accel[i] - accel[i - 1];
+            let slope = if ((t1 - t0) - self.dt).abs() <= 1e-15 * (t1.abs() + self.dt) {
+                rise * self.inv_dt
+            } else {
+                rise / (t1 - t0)
+            };
+            (accel[i - 1], slope, t1)
+        } else {
+            self.record.piece_before(i, self.t)
+        };
+        let t1 = piece_end.min(self.t_end);
+        let (e, dt) = (&self.extra, self.t - self.t_start);
+        let exc = Excitation {
+            ag: self.scale * a + e.ag + e.ag_rate * dt,
+            ag_rate: self.scale * slope + e.ag_rate,
+            fext: e.fext + e.fext_rate * dt,
+            fext_rate: e.fext_rate,
+        };
+        self.t = t1;
+        self.done = t1 >= self.t_end;
+        if i < time.len() && time[i] <= t1 {
+            self.next_sample = i + 1;
         }
-        let next_sample = record.time.get(i).copied().unwrap_or(f64::INFINITY);
-        advance_by_pieces(sim, next_sample.min(t_end), record, scale, extra)?;
+        Some((t1, exc))
     }
 }
 

@@ -14,15 +14,13 @@
 //! cluster by its cluster's increment.
 //!
 //! This file holds the [`Simulator`] and its stepping loop; beside it:
-//! `pieces` (excitation pieces, step sizes), `exact_map` and `folded` (the
-//! default's substeps on the exact map, proved event- and peak-free),
-//! `samples` (the same over a record's samples read directly), `upper` (the
-//! clusters above the structure's over a run of substeps), `exact_events`
-//! (the default's other substeps: events on the exact motion), `poly` (its
-//! polynomials), `structure_rk4` (the baseline's RK4 step), `events`
-//! (guards, firing, resolution, the baseline's step), `report` (outputs,
-//! counters, errors), `saved_state` and `state_check` (saved states and
-//! their validation).
+//! `pieces` (excitation pieces, step sizes), `sweep` (the default's one
+//! driver: substeps on the exact map of `exact_map`, proved free of
+//! switches by `proofs`), `exact_events` (the default's other substeps:
+//! switches located on the exact motion, with the polynomials of `poly`),
+//! `structure_rk4` (the baseline's RK4 step), `events` (guards, firing,
+//! resolution, the baseline's step), `report` (outputs, counters, errors),
+//! `saved_state` and `state_check` (saved states and their validation).
 
 use crate::physics::hermite;
 use crate::physics::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
@@ -33,15 +31,14 @@ use crate::physics::system::System;
 mod events;
 mod exact_events;
 mod exact_map;
-mod folded;
 mod pieces;
 mod poly;
+mod proofs;
 mod report;
-mod samples;
 mod saved_state;
 mod state_check;
 mod structure_rk4;
-mod upper;
+mod sweep;
 
 use events::Segment;
 use pieces::Piece;
@@ -50,7 +47,6 @@ pub use pieces::{
     FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP, STABLE_H_OMEGA,
 };
 pub use report::{Outputs, SimError, Stats};
-pub use samples::Samples;
 use structure_rk4::{move_bodies, upper_cluster_step, Structure, StructureRk4};
 
 /// The simulator: one scene, its state, peaks and energy terms.
@@ -261,7 +257,7 @@ impl Simulator {
                     // Substeps proved event-free on the exact map; the one
                     // it cannot prove on the exact motion with events
                     // located on it.
-                    pending = self.folded_steps(&mut piece, &mut pieces);
+                    pending = self.sweep(&mut piece, &mut pieces);
                     if piece.i > piece.n {
                         break;
                     }
@@ -297,10 +293,7 @@ impl Simulator {
     /// external force (it can break a stick; `ag` cannot).
     fn begin_piece(&mut self, t_end: f64, exc: &Excitation) -> Result<Piece, SimError> {
         exc.check(self.t, t_end)?;
-        // A ramp of Fext carried from piece to piece differs from where the
-        // last piece ended only by rounding: that is no jump to resolve.
-        let rounding = 1e-12 * exc.fext.abs().max(self.fext_now.abs());
-        if (exc.fext - self.fext_now).abs() > rounding {
+        if pieces::is_jump(exc.fext, self.fext_now) {
             // The guards that the jump violates fire as at any event.
             let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
             self.fire_violated(exc, self.t, all, 0);

@@ -2,7 +2,7 @@
 //! scene. 1 and 2 are the exact stick/slip engine with located or step-end
 //! switching; 3 is the tanh-regularized baseline (not a recommended mode).
 
-use crate::physics::engine::{self, Excitation, Outputs, Samples, SimError, Simulator};
+use crate::physics::engine::{self, Excitation, Outputs, SimError, Simulator};
 use crate::physics::params::{check_scalar, Method, ParamError, Params, Settings, MIN_MAX_STEP};
 use crate::physics::regularized::{self, RegularizedSimulator};
 use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
@@ -26,19 +26,6 @@ pub trait Stepper {
         }
         Ok(())
     }
-
-    /// Whether [`Stepper::advance_samples`] has a path of its own for a
-    /// record under these held inputs (the default method does).
-    fn takes_samples(&self, _extra: &Excitation) -> bool {
-        false
-    }
-
-    /// Advances over whole samples of a record from its first (now): by
-    /// default as their pieces.
-    fn advance_samples(&mut self, s: &Samples<'_>) -> Result<(), SimError> {
-        let t = self.time();
-        self.advance_pieces((0..s.time.len() - 1).map(|k| s.piece(k, t.max(s.time[k]))))
-    }
 }
 
 impl Stepper for Simulator {
@@ -53,12 +40,6 @@ impl Stepper for Simulator {
         pieces: impl Iterator<Item = (f64, Excitation)>,
     ) -> Result<(), SimError> {
         Simulator::advance_pieces(self, pieces)
-    }
-    fn takes_samples(&self, extra: &Excitation) -> bool {
-        Simulator::takes_samples(self, extra)
-    }
-    fn advance_samples(&mut self, s: &Samples<'_>) -> Result<(), SimError> {
-        Simulator::advance_samples(self, s)
     }
 }
 
@@ -275,18 +256,6 @@ impl Stepper for Solver {
         match self {
             Solver::Exact(s) => s.advance_pieces(pieces),
             Solver::Regularized(s) => Stepper::advance_pieces(s, pieces),
-        }
-    }
-    fn takes_samples(&self, extra: &Excitation) -> bool {
-        match self {
-            Solver::Exact(s) => s.takes_samples(extra),
-            Solver::Regularized(_) => false,
-        }
-    }
-    fn advance_samples(&mut self, samples: &Samples<'_>) -> Result<(), SimError> {
-        match self {
-            Solver::Exact(s) => s.advance_samples(samples),
-            Solver::Regularized(s) => Stepper::advance_samples(s, samples),
         }
     }
 }

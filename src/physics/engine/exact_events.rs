@@ -52,17 +52,17 @@ fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, [u, v]: [&mut 
     (u.deg, v.deg) = (deg, deg);
 }
 
-/// For the sample loop (`samples.rs`), over one whole substep from `z`
-/// where its bounds could not exclude a new interior peak: raises `peak_u`
-/// (when given) to the largest `|u|` and `peak_a` to the largest absolute acceleration
-/// `cf - w2 u - cm v` (held inputs), exactly, on the Taylor polynomials;
-/// `ends` are u and the acceleration at the substep's end.
+/// For the driver (`sweep.rs`), over one whole substep from `z` where its
+/// bounds could not exclude a new interior peak: raises `peak_u` (when
+/// given) to the largest `|u|` and `peak_a` to the largest absolute
+/// acceleration `cf + cf' τ - w2 u - cm v`, exactly, on the Taylor
+/// polynomials; `ends` are u and the acceleration at the substep's end.
 #[inline(never)]
 pub(super) fn raise_substep_peaks(
     [peak_u, peak_a]: [Option<&mut f64>; 2],
     z: [f64; 4],
     h: f64,
-    [w2, cm, cf]: [f64; 3],
+    [w2, cm, cf, cf_rate]: [f64; 4],
     deg: usize,
     [u_end, a_end]: [f64; 2],
 ) -> Result<(), Undecided> {
@@ -78,6 +78,7 @@ pub(super) fn raise_substep_peaks(
             *ak = -w2 * *ak - cm * vk;
         }
         a.c[0] += cf;
+        a.c[1] += cf_rate * h;
         raise_peak_exact(peak, &a, [a_end, a.spread(1.0)], 1.0, tol)?;
     }
     Ok(())

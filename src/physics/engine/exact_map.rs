@@ -192,6 +192,7 @@ impl ExactMap {
 
     /// `∫ v² dτ` over the substep from `z`.
     #[inline(always)]
+    #[cfg(test)]
     pub(super) fn int_v2(&self, z: &[f64; 4]) -> f64 {
         let q = &self.quad;
         z[0] * (q[0] * z[0] + q[4] * z[1] + q[5] * z[2] + q[6] * z[3])

@@ -84,6 +84,15 @@ impl Piece {
         }
     }
 
+    /// Whether a piece from `t_ref` to `t_end` is as long as this one up to
+    /// the rounding of their times (a record's next sample): it then keeps
+    /// this one's substeps.
+    #[inline(always)]
+    pub(super) fn same_length(&self, t_ref: f64, t_end: f64) -> bool {
+        let (length, before) = (t_end - t_ref, self.t_end - self.t_ref);
+        self.n > 0 && (length - before).abs() <= 1e-15 * (t_end.abs() + before)
+    }
+
     /// End time of substep `i` (the last one ends exactly at `t_end`).
     #[inline]
     pub(super) fn end_of(&self, i: usize) -> f64 {
@@ -120,6 +129,14 @@ pub const EVENT_TIME_TOL: f64 = 1e-12;
 /// Chatter guard: at most this many located events in one internal step;
 /// past it the rest of the step switches at its end only.
 pub const MAX_EVENTS_PER_STEP: u32 = 64;
+
+/// Whether `Fext` moving from `before` to `after` at an instant is a jump
+/// (which can break a stick), not the rounding of a ramp carried across
+/// pieces.
+#[inline(always)]
+pub(super) fn is_jump(after: f64, before: f64) -> bool {
+    (after - before).abs() > 1e-12 * after.abs().max(before.abs())
+}
 
 /// Number of equal substeps of at most `h_max` in an interval of `length`.
 /// A ratio within 1e-9 of an integer is that integer: the interval is a

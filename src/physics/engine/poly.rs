@@ -5,7 +5,7 @@
 //! the work terms need. Used by the event path (`exact_events.rs`) and, for
 //! peaks, by the sample loop (`samples.rs`).
 
-use super::folded::stays_positive;
+use super::proofs::stays_positive;
 
 /// Coefficients of a polynomial (degree at most `exact_map`'s largest, plus
 /// the integral's one).

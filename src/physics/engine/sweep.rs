@@ -1,0 +1,426 @@
+//! The exact default's one driver: every input source (a record's samples,
+//! the FMU's inputs with their slopes and jumps, both together) comes as
+//! consecutive pieces on which `ag` and `Fext` are linear, and one loop
+//! takes their substeps on the exact map of the current mode.
+//!
+//! A substep (`ω h <= 0.5`, or `maxStep`) is taken here only when the
+//! proofs of `proofs.rs` show that no guard changes sign inside it; a new
+//! interior peak of `|u0|` or `|A0|` that the bounds cannot exclude is found
+//! in place on the substep's Taylor polynomials. Anything else (every
+//! switch) goes back to `Simulator::advance_pieces`, which hands that
+//! substep to the event path (`exact_events.rs`) and then returns here.
+//!
+//! The energy terms are exact and summed per run: the structure cluster's
+//! input and viscous work are quadratic in the substeps' start vectors
+//! `z = [u, v, p, p']`, so a run keeps the sums of `z_i z_j` and `z_i`
+//! ([`WorkSums`]) instead of two quadratic forms per substep; the upper
+//! clusters' input work is `Δ(m v²/2) - m A Δu` over the run (their
+//! absolute acceleration `A` is constant in a mode, whatever `ag` does).
+//!
+//! The maps are cached by substep length up to rounding
+//! (`exact_map::canonical_length`); a substep whose length differs from
+//! its map's by that rounding (at most 1e-9 relative) is completed to first
+//! order in the difference, which leaves an error of its square.
+
+use super::exact_events::raise_substep_peaks;
+use super::exact_map::{canonical_length, dot, ExactMap};
+use super::pieces::is_jump;
+use super::proofs::{in_band_proved, raise_peak_proved, slip_guard_proved, structure_peaks_proved};
+use super::{move_bodies, Excitation, Piece, Simulator};
+use crate::physics::hermite;
+use crate::physics::mode::{safe_accel_band, Guard};
+use crate::physics::params::MAX_BODIES;
+
+/// Sums over a run of the products `z_i z_j` and of `z_i`, for the
+/// substeps' start vectors `z = [u, v, p, p']` on one map: the structure
+/// cluster's viscous and input work are quadratic in `z`, so their sums over
+/// the run follow from these at its end.
+#[derive(Default)]
+struct WorkSums {
+    /// Packed as `ExactMap::quad`: 00, 11, 22, 33, 01, 02, 03, 12, 13, 23.
+    products: [f64; 10],
+    linear: [f64; 4],
+}
+
+impl WorkSums {
+    #[inline(always)]
+    fn add(&mut self, z: &[f64; 4]) {
+        let (s, [z0, z1, z2, z3]) = (&mut self.products, *z);
+        s[0] += z0 * z0;
+        s[1] += z1 * z1;
+        s[2] += z2 * z2;
+        s[3] += z3 * z3;
+        s[4] += z0 * z1;
+        s[5] += z0 * z2;
+        s[6] += z0 * z3;
+        s[7] += z1 * z2;
+        s[8] += z1 * z3;
+        s[9] += z2 * z3;
+        for (l, x) in self.linear.iter_mut().zip(z) {
+            *l += x;
+        }
+    }
+
+    /// `Σ ∫ v² dτ`: the sum of `ExactMap::int_v2` over the substeps.
+    fn int_v2(&self, map: &ExactMap) -> f64 {
+        map.quad
+            .iter()
+            .zip(&self.products)
+            .map(|(q, s)| q * s)
+            .sum()
+    }
+
+    /// The input work per unit mass, summed: per substep
+    /// `(p - L) (u1 - u) + p' (h u1 - ∫u)` with `u1 = U z`, `L` the mode's
+    /// load per unit mass (`p - L = Fext / m - ag`).
+    fn input(&self, map: &ExactMap, load_accel: f64) -> f64 {
+        let (s, l, u) = (&self.products, &self.linear, &map.u);
+        let h = map.h;
+        // Σ (p - L) (U z - u): the rows times the sums of p z_j and of z_j,
+        // with U's first entry less one (the `- u`).
+        let u0m1 = u[0] - 1.0;
+        let with_p = u0m1 * s[5] + u[1] * s[7] + u[2] * s[2] + u[3] * s[9];
+        let with_1 = u0m1 * l[0] + u[1] * l[1] + u[2] * l[2] + u[3] * l[3];
+        // Σ p' (h U - I) z.
+        let w: [f64; 4] = std::array::from_fn(|j| h * u[j] - map.int_u[j]);
+        let with_rate = w[0] * s[6] + w[1] * s[8] + w[2] * s[9] + w[3] * s[3];
+        with_p - load_accel * with_1 + with_rate
+    }
+
+    /// Adds the sums' work on `map` to `[input, viscous]` and starts anew.
+    fn flush(&mut self, map: &ExactMap, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
+        work[0] += mass * self.input(map, load_accel);
+        work[1] += map.c * self.int_v2(map);
+        *self = WorkSums::default();
+    }
+}
+
+/// The inputs over the current piece: values at the current substep's
+/// start, slopes over the piece.
+#[derive(Clone, Copy)]
+struct Inputs {
+    ag: f64,
+    fext: f64,
+    ag_rate: f64,
+    fext_rate: f64,
+}
+
+impl Inputs {
+    fn at(piece: &Piece, t: f64) -> Inputs {
+        let (e, dt) = (&piece.exc, t - piece.t_ref);
+        Inputs {
+            ag: e.ag + e.ag_rate * dt,
+            fext: e.fext + e.fext_rate * dt,
+            ag_rate: e.ag_rate,
+            fext_rate: e.fext_rate,
+        }
+    }
+}
+
+impl Simulator {
+    /// Takes the substeps of `piece` from `piece.i` on, then those of the
+    /// following `pieces`, until one cannot be proved free of switches:
+    /// `piece` is then the piece it belongs to, `piece.i` its index.
+    /// Otherwise `piece` is the last piece taken, finished; a next piece
+    /// that must be begun anew (a jump of `Fext`, or a bad value) is
+    /// returned untouched.
+    pub(super) fn sweep(
+        &mut self,
+        piece: &mut Piece,
+        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+    ) -> Option<(f64, Excitation)> {
+        match self.dynamics.n_clusters {
+            1 => self.sweep_clusters::<1>(piece, pieces),
+            2 => self.sweep_clusters::<2>(piece, pieces),
+            3 => self.sweep_clusters::<3>(piece, pieces),
+            4 => self.sweep_clusters::<4>(piece, pieces),
+            5 => self.sweep_clusters::<5>(piece, pieces),
+            6 => self.sweep_clusters::<6>(piece, pieces),
+            7 => self.sweep_clusters::<7>(piece, pieces),
+            8 => self.sweep_clusters::<8>(piece, pieces),
+            _ => self.sweep_clusters::<MAX_BODIES>(piece, pieces),
+        }
+    }
+
+    /// [`Simulator::sweep`] in a mode with `NC` clusters (cluster 0 the
+    /// structure's; moving interface m between clusters m and m + 1).
+    #[inline(never)]
+    fn sweep_clusters<const NC: usize>(
+        &mut self,
+        piece: &mut Piece,
+        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+    ) -> Option<(f64, Excitation)> {
+        let h_max = self.map_step();
+        let (sys, d, maps) = (&self.sys, &self.dynamics, &mut self.maps);
+        debug_assert_eq!(d.n_clusters, NC);
+        // Constants of the mode.
+        let guards = &d.guards[..d.n_guards];
+        let (band_lo, band_hi) = safe_accel_band(guards);
+        let has_band = guards.iter().any(|g| matches!(g, Guard::Stuck { .. }));
+        let mut slip_sign = [0.0; NC];
+        for g in guards {
+            if let Guard::Slip { lo, sign, .. } = *g {
+                slip_sign[lo] = sign;
+            }
+        }
+        let iface: [usize; NC] = std::array::from_fn(|m| {
+            if NC > 1 {
+                d.moving[m.min(NC.saturating_sub(2))].j
+            } else {
+                0
+            }
+        });
+        let (mass, inv_mass) = (d.mass[0], d.inv_mass0);
+        let load_accel = d.slip_load[0] * inv_mass;
+        let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
+        // The piece in locals (written back at the end): the loop reads
+        // them every substep.
+        let mut cur = *piece;
+        let first = maps.index(sys, mass, canonical_length(cur.h));
+        let mut map = maps.get(first);
+        let (mut w2, mut cm) = (map.w2, map.cm);
+        let mut rows = Rows::new(map, cur.h);
+
+        // The run's state.
+        let mut u0 = self.u[0];
+        let mut vel: [f64; NC] = std::array::from_fn(|c| self.v[d.bottom[c]]);
+        let vel_start = vel;
+        let mut slip: [f64; NC] = std::array::from_fn(|m| {
+            let j = iface[m];
+            if NC > 1 {
+                self.u[j] - self.u[j - 1]
+            } else {
+                0.0
+            }
+        });
+        let slip_start = slip;
+        let mut shift = [0.0; NC];
+        let mut peak_slip: [f64; NC] = std::array::from_fn(|m| self.peak_slip[iface[m]]);
+        let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
+        let mut sums = WorkSums::default();
+        // Work of maps already left, and of the rounding of substep lengths.
+        let mut work = [0.0; 2];
+        let mut t0 = self.t;
+        let mut inp = Inputs::at(&cur, t0);
+        let mut a_abs = load_accel + inp.fext * inv_mass - w2 * u0 - cm * vel[0];
+        let mut taken = 0u64;
+        let mut pending = None;
+
+        'steps: loop {
+            if cur.i > cur.n {
+                let Some((t_end, exc)) = pieces.next() else {
+                    break;
+                };
+                // A jump of Fext, or a bad value: the piece is begun anew.
+                if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() {
+                    pending = Some((t_end, exc));
+                    break;
+                }
+                if cur.same_length(t0, t_end) {
+                    // A record's next sample: the same substeps, map and rows.
+                    (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
+                } else {
+                    cur = Piece::new(t0, t_end, &exc, h_max);
+                    let hc = canonical_length(cur.h);
+                    if hc != map.h {
+                        sums.flush(map, mass, load_accel, &mut work);
+                        let i = maps.index(sys, mass, hc);
+                        map = maps.get(i);
+                        (w2, cm) = (map.w2, map.cm);
+                    }
+                    rows = Rows::new(map, cur.h);
+                }
+                // A0 carries over: it is continuous (a jump of Fext ends the run).
+                inp = Inputs {
+                    ag: exc.ag,
+                    fext: exc.fext,
+                    ag_rate: exc.ag_rate,
+                    fext_rate: exc.fext_rate,
+                };
+                continue;
+            }
+            // Every substep of a piece is `cur.h` long; the last ends at the
+            // piece's end, which differs from `t0 + h` only by the rounding
+            // of the times.
+            let hs = cur.h;
+            let t1 = if cur.i == cur.n { cur.t_end } else { t0 + hs };
+            let fext_rate_m = inp.fext_rate * inv_mass;
+            let z = [
+                u0,
+                vel[0],
+                load_accel + inp.fext * inv_mass - inp.ag,
+                fext_rate_m - inp.ag_rate,
+            ];
+            let (u1, v1) = (dot(&rows.u, &z), dot(&rows.v, &z));
+            let rounding = if rows.delta != 0.0 {
+                let p_nominal = z[2] + z[3] * map.h;
+                [
+                    rows.delta * mass * (p_nominal - load_accel) * v1,
+                    rows.delta * map.c * v1 * v1,
+                ]
+            } else {
+                [0.0; 2]
+            };
+            let (ag1, fext1) = (inp.ag + inp.ag_rate * hs, inp.fext + inp.fext_rate * hs);
+            let a1 = load_accel + fext1 * inv_mass - w2 * u1 - cm * v1;
+            let s3 = map.sup_v(3, &z);
+            // Stuck interfaces: the absolute acceleration stays in the band.
+            // Its rate: A' = Fext'/m - w2 v - cm (A - ag).
+            let ends = [a_abs, a1];
+            let jerks = || {
+                [
+                    fext_rate_m - w2 * vel[0] - cm * (a_abs - inp.ag),
+                    fext_rate_m - w2 * v1 - cm * (a1 - ag1),
+                ]
+            };
+            if has_band && !in_band_proved(ends, jerks, hs, s3, [band_lo, band_hi]) {
+                break;
+            }
+            // Upper clusters: exact polynomials; the ground's terms are
+            // common to all (∫ag and ∫∫ag over the substep).
+            let g1 = 0.5 * hs * (inp.ag + ag1);
+            let g2 = hs * hs * (inp.ag / 3.0 + ag1 / 6.0);
+            let (mut du, mut v_end) = ([0.0; NC], [0.0; NC]);
+            (du[0], v_end[0]) = (u1 - u0, v1);
+            for c in 1..NC {
+                du[c] = hs * vel[c] + 0.5 * hs * hs * accel_c[c] - g2;
+                v_end[c] = vel[c] + hs * accel_c[c] - g1;
+            }
+            let s2 = if NC > 1 { map.sup_v(2, &z) } else { 0.0 };
+            for m in 0..NC - 1 {
+                let sign = slip_sign[m];
+                if sign == 0.0 {
+                    continue;
+                }
+                let (g0, g1) = (
+                    sign * (vel[m + 1] - vel[m]),
+                    sign * (v_end[m + 1] - v_end[m]),
+                );
+                let holds = if m == 0 {
+                    // |g''| <= sup|v0''| + |ag'|.
+                    let rates = || [sign * (accel_c[1] - a_abs), sign * (accel_c[1] - a1)];
+                    slip_guard_proved([g0, g1], rates, hs, s2 + inp.ag_rate.abs())
+                } else {
+                    // Linear in time between two upper clusters.
+                    g0 >= 0.0 && g1 > 0.0
+                };
+                if !holds {
+                    break 'steps;
+                }
+            }
+            // Peaks of |u0| and |A0|; where the bounds cannot exclude a new
+            // one inside, on the polynomials.
+            let peaks = [&mut peak_u0, &mut peak_a0];
+            let [u_proved, a_proved] =
+                structure_peaks_proved(map, &z, [u1, v1], ends, jerks, hs, s3, peaks);
+            if !(u_proved && a_proved) {
+                let peaks = [
+                    (!u_proved).then_some(&mut peak_u0),
+                    (!a_proved).then_some(&mut peak_a0),
+                ];
+                let cf = load_accel + inp.fext * inv_mass;
+                let rates = [w2, cm, cf, fext_rate_m];
+                if raise_substep_peaks(peaks, z, map.h, rates, map.degree, [u1, a1]).is_err() {
+                    break;
+                }
+            }
+            // Slips. One whose guard was proved above keeps its direction:
+            // it peaks at an end. A free interface on the structure:
+            // slip''' = -(ag' + v0''), slip'''' = -v0'''; between upper
+            // clusters a quadratic in time, which the cubic gives exactly.
+            let mut new_slip = slip;
+            for m in 0..NC - 1 {
+                let increment = du[m + 1] - du[m];
+                let (vr0, vr1) = (vel[m + 1] - vel[m], v_end[m + 1] - v_end[m]);
+                new_slip[m] = slip[m] + increment;
+                let ends = [slip[m], vr0, new_slip[m], vr1];
+                if slip_sign[m] != 0.0 {
+                    let (e0, e1) = (slip[m].abs(), new_slip[m].abs());
+                    let end = if e0 > e1 { e0 } else { e1 };
+                    if end > peak_slip[m] {
+                        peak_slip[m] = end;
+                    }
+                } else if m == 0 {
+                    let third = s2 + inp.ag_rate.abs();
+                    if !raise_peak_proved(&mut peak_slip[m], ends, hs, s3, || third) {
+                        break 'steps;
+                    }
+                } else {
+                    hermite::raise_peak(&mut peak_slip[m], ends[0], vr0, ends[2], vr1, hs);
+                }
+            }
+            // Taken.
+            sums.add(&z);
+            work[0] += rounding[0];
+            work[1] += rounding[1];
+            slip = new_slip;
+            for c in 1..NC {
+                shift[c] += du[c];
+            }
+            (u0, vel, a_abs) = (u1, v_end, a1);
+            (inp.ag, inp.fext) = (ag1, fext1);
+            t0 = t1;
+            cur.i += 1;
+            taken += 1;
+        }
+
+        *piece = cur;
+        if taken > 0 {
+            sums.flush(map, mass, load_accel, &mut work);
+            // Input work on the upper clusters over the run, exact: with
+            // v_c' = A_c - ag, -m ag v_c = d(m v_c²/2)/dt - m A_c v_c.
+            let mut upper = 0.0;
+            for c in 1..NC {
+                let m = d.mass[c];
+                upper += 0.5 * m * (vel[c] * vel[c] - vel_start[c] * vel_start[c])
+                    - m * accel_c[c] * shift[c];
+            }
+            self.e_input += work[0] + upper;
+            self.e_viscous += work[1];
+            let (mut shift_all, mut vel_all) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
+            shift_all[..NC].copy_from_slice(&shift);
+            vel_all[..NC].copy_from_slice(&vel);
+            let n = self.sys.n;
+            move_bodies(&mut self.u, &mut self.v, d, n, u0, &shift_all, &vel_all);
+            for m in 0..NC - 1 {
+                let j = iface[m];
+                self.e_friction[j] -= d.slip_force[j] * (slip[m] - slip_start[m]);
+                self.peak_slip[j] = peak_slip[m];
+            }
+            self.peak_u0 = peak_u0;
+            self.peak_a0 = peak_a0;
+            self.stats.steps += taken;
+            self.t = t0;
+        }
+        pending
+    }
+}
+
+/// The rows of a substep of length `h` on `z = [u, v, p, p']`: the map's
+/// (built for `h` up to rounding), completed to first order in their
+/// difference `delta` (u' = v, v' the acceleration).
+struct Rows {
+    delta: f64,
+    u: [f64; 4],
+    v: [f64; 4],
+}
+
+impl Rows {
+    fn new(map: &ExactMap, h: f64) -> Rows {
+        let delta = h - map.h;
+        let accel = acceleration_row(map);
+        Rows {
+            delta,
+            u: std::array::from_fn(|k| map.u[k] + delta * map.v[k]),
+            v: std::array::from_fn(|k| map.v[k] + delta * accel[k]),
+        }
+    }
+}
+
+/// The structure cluster's acceleration relative to the support at the end
+/// of `map`'s substep as a row on `z = [u, v, p, p']`: `p + p' h - w2 u1 -
+/// cm v1` with `u1`, `v1` the map's rows.
+fn acceleration_row(map: &ExactMap) -> [f64; 4] {
+    let p = [0.0, 0.0, 1.0, map.h];
+    std::array::from_fn(|k| p[k] - map.w2 * map.u[k] - map.cm * map.v[k])
+}
