@@ -119,7 +119,7 @@ def test_the_chart_script_writes_its_csv_png_and_a_front(tmp_path):
         rows = list(csv.DictReader(f))
     assert list(rows[0].keys()) == accuracy_speed.COLUMNS
     methods = {r["method"] for r in rows}
-    assert {"event", "step-end"} <= methods and any(m.startswith("tanh") for m in methods)
+    assert {"exact", "step-end"} <= methods and any(m.startswith("tanh") for m in methods)
     if opensees_block.available() is None:
         assert any(m.startswith("opensees") for m in methods)
     assert (tmp_path / "accuracy_speed.png").stat().st_size > 10_000
