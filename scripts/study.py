@@ -570,6 +570,12 @@ def docs_table(meta: dict) -> str:
     for i, first in enumerate(rows[levels[0]]):
         cells = [f"**{rows[lv][i]['verdict']}**: {rows[lv][i]['numbers']}".replace("|", "/") for lv in levels]
         lines.append(f"| {first['conclusion']} | " + " | ".join(cells) + " |")
+    if meta.get("sa_rigid_g"):
+        lines += ["", "Spectral acceleration of the structure with its load attached (`Sa_rigid`, suite mean) where "
+                  "the paper draws its thresholds: " + "; ".join(f"{k}: {lo:.3f}-{hi:.3f} g"
+                                                                for k, (lo, hi) in meta["sa_rigid_g"].items()) + "."]
+    if meta.get("collapse"):
+        lines += ["", collapse_text(meta["collapse"])]
     return "\n".join(lines + [DOCS_END])
 
 
@@ -644,7 +650,16 @@ def report(runs: list[dict], out: Path, meta: dict):
     (out / "conclusions.md").write_text("\n".join(lines))
     labels = {Path(f).stem: note for _, f, note in ground_motions.PAPER_SUITE}
     records = sorted({r["record"] for r in runs})
-    study = {**meta, "zones": zones,
+    # The floor acceleration a rigid load would feel (the suite mean of Sa with the load
+    # attached) where the paper draws its thresholds: conclusions 5 (Zone III, Tp >= 2 s)
+    # and 6 (Zone V, Tp >= 1.25 s).
+    sa = {}
+    for level in levels:
+        for zone, tmin in (("III", 2.0), ("V", 1.25)):
+            vals = [r["Sa_rigid"] for r in drr if r["level"] == level and r["zone"] == zone and r["Tp"] >= tmin - 1e-9]
+            if vals:
+                sa[f"{level}, Zone {zone}, Tp >= {tmin:g} s"] = [min(vals), max(vals)]
+    study = {**meta, "zones": zones, "sa_rigid_g": sa,
              "levels": [{"level": lv, "records_factor": level_factor(lv),
                          "design_pga_g": {z: design_pga(z, lv) for z in zones}} for lv in levels],
              "suites_matched_to": "IS 1893 (Part 1):2016, soil type I, DBE (Z/2), 5 % damping",
