@@ -368,7 +368,9 @@ def advise(records: list[Path], tp: float, zeta: float, alphas: list[float], mus
                        "above_max": sum(r["status"] == "above" for r in per_rec)},
         # Lowest and highest over the friction box (the highest with the search's margin).
         "friction_sweep": {"min": min(f_low, frac["fraction"]), "max": max(f_high, frac["fraction"]),
-                           "at_factors_of_max": top["point"]},
+                           "at_factors_of_max": top["point"],
+                           "values": [fraction_roots(scene.rigid_mean, float(np.mean(p["stack"])))["fraction"]
+                                      for p in scene.points(named)]},  # at the named points (friction_sweep)
         # With the rigid model's mean drift rising with the attached share, the box's
         # largest fraction is not unconservative anywhere in the box.
         "design_value": max(f_high, frac["fraction"]) if frac["increasing"] else None,
@@ -666,14 +668,13 @@ def plot(r: dict, path: Path, title: str):
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_xticks(range(len(SIMPLER)), [f"{m}\n{'accepted' if r['models'][m]['accepted'] else 'rejected'}"
                                         for m in SIMPLER])
-    ax.set_ylabel("peak drift / stack's, per record (bars: mean, dashed at the worst friction)")
-    ax.set_title(f"models against the stack over {len(names)} records; advice: {r['verdict']}"
+    ax.set_ylabel("peak drift / stack's, per record")
+    ax.set_title(f"per record (bars: means; dashed: at the worst friction); advice: {r['verdict']}"
                  + (f" (else {r['model_verdict']})" if r["verdict"] == "slides-off" else ""), fontsize=10)
     ax.legend(fontsize=7)
     ax = axes[0, 1]
     box = r["friction_box"]["points"]
     us = np.array(box["u_stack"])
-    order = np.argsort(us)
     for k, m in enumerate(SIMPLER):
         if m == "single":
             y = np.array(box["u_single"]) / us
@@ -686,7 +687,6 @@ def plot(r: dict, path: Path, title: str):
     ax.set_ylabel("mean drift / stack's")
     ax.set_title(f"friction box: every mu x (1 -+ {rule['mu_uncertainty']:g}), each interface on its own", fontsize=10)
     ax.legend(fontsize=8)
-    del order
     ax = axes[1, 0]
     f = r["effective_mass_fraction"]
     ax.hist(f["per_record"]["values"], bins=10, color="0.75", label="per record (nominal friction)")

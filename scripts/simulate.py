@@ -124,6 +124,7 @@ def main(argv=None):
         print(f"{record_path.name}: {len(t)} samples, {t[-1]:.2f} s; output every {dt} s", flush=True)
         result = model.run(args.record, params, dt=dt)
         scene = scene_text(model, params, result["nBlocks"])
+        print(f"scene: {scene}", flush=True)
         ag = ag * float(params.get("recordScale", 1.0))
     names = ["time"] + [k for k in result if isinstance(result[k], np.ndarray) and k != "time"]
     with open(out / "response.csv", "w", newline="") as f:
