@@ -171,7 +171,7 @@ def test_the_docs_table_is_written_by_the_study(quick, tmp_path):
     assert text.count(study.DOCS_BEGIN) == 1 and text.count(study.DOCS_END) == 1
     block = text.split(study.DOCS_BEGIN, 1)[1].split(study.DOCS_END, 1)[0]
     assert "Generated from `study.json` of `study.py --level DBE MCE`" in block
-    assert block.count("\n| ") == 1 + 6  # the header and the paper's six conclusions
+    assert block.count("\n| ") == 2 + 6  # the header, its rule and the paper's six conclusions
     meta = json.loads((quick / "study.json").read_text())
     copy = tmp_path / "page.md"
     copy.write_text(text)
