@@ -162,6 +162,13 @@ def how(r: float) -> str:
     return "equal to the stack" if d == "equal" else f"{d} by {100 * abs(r - 1):.1f} %"
 
 
+def versus(r: float) -> str:
+    """A ratio of drifts in words: "12.0 % above", "3.1 % below", "equal to"."""
+    if abs(r - 1.0) <= FLOOR:
+        return "equal to"
+    return f"{100 * abs(r - 1):.1f} % {'above' if r > 1 else 'below'}"
+
+
 def spread(values: np.ndarray) -> dict:
     return {"min": float(np.min(values)), "max": float(np.max(values)),
             **{f"p{q}": float(np.percentile(values, q)) for q in PERCENTILES}}
@@ -573,8 +580,8 @@ def advice_text(verdict: str, model_verdict: str, sliding: dict | None) -> str:
             + ", ".join(f"block {j}: at least {d:.3f} m" for j, d in sliding["edge_distance_needed"].items())
             + f"; then: {model_verdict} — {WORDS[model_verdict]}), "
             f"or design for the loss of {lost_words}: the structure then drifts {red['mean_peak_drift']:.4g} m "
-            f"(mean; {red['worst_over_box']:.4g} m at the worst friction), {how(red['ratio_to_stack'])} "
-            f"against the stack with it on; design for the envelope, {sliding['design_drift']:.4g} m")
+            f"(mean; {red['worst_over_box']:.4g} m at the worst friction), {versus(red['ratio_to_stack'])} "
+            f"the stack's drift with it on; design for the envelope, {sliding['design_drift']:.4g} m")
 
 
 def suite_check(zone: str, quick: bool, tp: float, alphas: list[float]) -> dict:
@@ -719,7 +726,7 @@ def plot(r: dict, path: Path, title: str):
     if r.get("sliding_off"):
         s = r["sliding_off"]
         t = (f"SLIDES OFF: blocks {s['lost_blocks']} lost; drift then {s['reduced']['mean_peak_drift']:.3g} m "
-             f"({how(s['reduced']['ratio_to_stack'])})")
+             f"({versus(s['reduced']['ratio_to_stack'])} the stack's)")
     ax.set_title(t, fontsize=10)
     ax.legend(fontsize=7)
     fig.suptitle(title, fontsize=11)
