@@ -1,7 +1,7 @@
 """Ground-motion suites matched to an IS 1893 (Part 1):2016 design spectrum.
 
-    python scripts/ground_motions.py suite --zone V --soil I --level DBE --out DIR RECORD...
-    python scripts/ground_motions.py paper [--out target/suites]      # the paper's Zone III and V suites
+    python scripts/ground_motions.py suite --zone V --soil I --level DBE --out DIR [--check-range TMIN TMAX] RECORD...
+    python scripts/ground_motions.py paper [--out DIR]       # the paper's Zone III and V suites (default: the cache)
     python scripts/ground_motions.py default                          # regenerate resources/default_record.csv
 
 `suite` matches every record to the target (continuous-wavelet matching with
