@@ -51,9 +51,15 @@ def cache_dir() -> Path:
     the same machine finds them)."""
     import os
 
-    base = os.environ.get("SLL_CACHE") or (Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-                                           / "stacked-live-load")
-    return Path(base)
+    base = Path(os.environ.get("SLL_CACHE") or (Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+                                                / "stacked-live-load"))
+    try:
+        base.mkdir(parents=True, exist_ok=True)
+        probe = base / ".writable"
+        probe.touch()
+        return base
+    except OSError:  # no writable home (some CI runners): the build directory, ignored by git
+        return ROOT / "target" / "cache"
 
 
 def settings_key() -> str:
