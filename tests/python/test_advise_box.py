@@ -205,3 +205,17 @@ def test_the_command_scripts_run_as_the_docs_write_them(tmp_path):
     out = subprocess.run(["python3", str(ROOT / "scripts" / "advise.py"), "--help"], capture_output=True, text=True,
                          cwd=tmp_path, timeout=120)
     assert out.returncode == 0 and "--occupancy" in out.stdout, out.stderr
+
+
+@pytest.mark.parametrize("tp, alphas, mus", [(1.0, [0.2, 0.3], [0.1, 0.1]), (0.6, [0.2, 0.2, 0.2], [0.2, 0.1, 0.05])])
+def test_no_random_point_of_the_box_is_worse_than_the_search_says(records, tp, alphas, mus):
+    # 400 uniform random points of the +-30 % box (seeded), run independently of the search's
+    # points: the stack never drifts more than the search's largest drift plus its margin, and the
+    # single block's ratio is never below the search's worst minus its margin.
+    r = advise.advise(records, tp, 0.05, alphas, mus, mus)
+    scene = advise.Scene(advise.Runner(records, 1.0), tp, 0.05, alphas, mus, mus)
+    P = np.random.default_rng(7).uniform(0.7, 1.3, size=(400, len(alphas)))
+    o = scene.objectives(P)
+    box, single = r["friction_box"], r["models"]["single"]["friction_sweep"]
+    assert -o["stack_drift"].min() <= (box["stack_drift_max"] + box["stack_drift_max_margin"]) * (1 + 1e-12)
+    assert o["single_ratio"].min() >= single["worst_bound"] - 1e-12
