@@ -546,7 +546,14 @@ def main(argv=None):
               "cores": os.cpu_count()}
     (args.out / "timing.json").write_text(json.dumps(timing, indent=1) + "\n")
     print(f"{len(runs)} simulations in {seconds:.1f} s ({len(runs) / seconds:.0f}/s)", flush=True)
-    report(runs, args.out, {"grid": grid, "timing": timing})
+    checks = {}
+    for z in args.zones:  # ASCE 7-16 16.2.3.3 over the study's periods, as matched (ground_motions.CHECK_RANGE)
+        c = json.loads((suite(z, args.quick)[0].parent / "suite.json").read_text())["criterion"]
+        checks[z] = c
+        print(f"Zone {z} suite: lowest mean/target {c['min_mean_over_target']:.3f} at {c['at_period_s']:.2f} s over "
+              f"{c['range_s'][0]:g}-{c['range_s'][1]:g} s (ASCE 7-16 16.2.3.3, >= 0.9): "
+              f"{'PASS' if c['passed'] else 'FAIL'}", flush=True)
+    report(runs, args.out, {"grid": grid, "timing": timing, "suite_checks": checks})
     if args.docs:
         write_docs(args.docs, json.loads((args.out / "study.json").read_text()))
     return 0
@@ -565,6 +572,11 @@ def docs_table(meta: dict) -> str:
     head = (f"Generated from `study.json` of `study.py --level {' '.join(levels)}` (zones "
             f"{', '.join(meta['zones'])}; {timing.get('simulations', '?')} simulations in {timing.get('seconds', '?')} s "
             f"on {timing.get('where', '?')}).")
+    if meta.get("suite_checks"):
+        head += " Suites, ASCE 7-16 16.2.3.3 over the study's periods: " + "; ".join(
+            f"Zone {z} lowest mean/target {c['min_mean_over_target']:.3f} at {c['at_period_s']:.2f} s over "
+            f"{c['range_s'][0]:g}-{c['range_s'][1]:g} s, {'PASS' if c['passed'] else 'FAIL'}"
+            for z, c in meta["suite_checks"].items()) + "."
     lines = [DOCS_BEGIN, head, "", "| paper's conclusion | " + " | ".join(levels) + " |",
              "| --- |" + " --- |" * len(levels)]
     for i, first in enumerate(rows[levels[0]]):
