@@ -387,6 +387,11 @@ def advise(records: list[Path], tp: float, zeta: float, alphas: list[float], mus
                                 fraction)
     slips = slip_check(scene, box, nominal, names, allow)
     warnings = list(slips["warnings"])
+    if not allow and any(b["max_over_friction_sweep"] > 0.0 for b in slips["blocks"]):
+        warnings.append("sliding off not checked (no --max-slip): the blocks slide up to "
+                        + ", ".join(f"{b['max_over_friction_sweep']:.3f} m (block {b['block']})"
+                                    for b in slips["blocks"] if b["max_over_friction_sweep"] > 0.0)
+                        + " on the body below over the friction box; give each block's edge distance as --max-slip")
     verdict = model_verdict
     sliding = None
     if slips["slides_off"]:
