@@ -17,13 +17,14 @@ import json
 import sys
 from pathlib import Path
 
-import matplotlib
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import use_venv  # noqa: E402,F401  (re-runs this script under the repository's .venv if needed)
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sll import DEFAULT_RECORD, Model, read_record  # noqa: E402
 
 
@@ -47,10 +48,36 @@ def typed(model: Model, params: dict) -> dict:
     return out
 
 
-def plot(result: dict, title: str, path: Path):
+def scene_text(model: Model, params: dict, n_blocks: int) -> str:
+    """The scene as the FMU ran it (its defaults and the --set values): period,
+    damping, each block's mass ratio and friction."""
+    def value(name):
+        v = params.get(name, model.vars[name].start)
+        return float(v)
+
+    text = f"Tp {value('Tp'):g} s, zeta {value('zeta'):g}"
+    if n_blocks:
+        alphas = " + ".join(f"{value('alpha[%d]' % j):g}" for j in range(1, n_blocks + 1))
+        mus = " / ".join(f"{value('mus[%d]' % j):g}" for j in range(1, n_blocks + 1))
+        text += f"; {n_blocks} block(s), alpha {alphas}, mu {mus}"
+    scale = value("recordScale") if "recordScale" in model.vars else 1.0
+    return text + (f"; record x {scale:g}" if scale != 1.0 else "")
+
+
+def plot(result: dict, title: str, path: Path, ground: tuple | None = None):
+    """Ground motion (if given: time, accel in m/s2), drift, slips, friction forces and
+    the stick/slip timeline, one panel each."""
     t, n = result["time"], result["nBlocks"]
-    fig, axes = plt.subplots(4, 1, figsize=(10, 10), sharex=True,
-                             gridspec_kw={"height_ratios": [3, 3, 3, 1.2 + 0.3 * n]})
+    top = 1 if ground is not None else 0
+    fig, axes = plt.subplots(4 + top, 1, figsize=(10, 12 if top else 10), sharex=True,
+                             gridspec_kw={"height_ratios": [2] * top + [3, 3, 3, 1.2 + 0.3 * n]})
+    if top:
+        tg, ag = ground
+        axes[0].plot(tg, ag / 9.81, color="tab:brown", lw=0.6)
+        axes[0].set_ylabel("ground accel. (g)")
+        k = int(np.argmax(np.abs(ag)))
+        axes[0].set_title(f"ground motion: PGA {abs(ag[k]) / 9.81:.3f} g at {tg[k]:.2f} s", fontsize=9)
+        axes = axes[1:]
     axes[0].plot(t, 1000 * result["up"], color="k", lw=0.8)
     axes[0].set_ylabel("structure drift up (mm)")
     for j in range(1, n + 1):
@@ -72,9 +99,9 @@ def plot(result: dict, title: str, path: Path):
     axes[3].set_ylim(0.4, n + 0.6)
     axes[3].set_ylabel("slipping")
     axes[3].set_xlabel("time (s)")
-    for ax in axes:
+    for ax in fig.axes:
         ax.grid(alpha=0.3)
-    fig.suptitle(title)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -92,10 +119,13 @@ def main(argv=None):
     with Model() as model:
         params = typed(model, parse_settings(args.set))
         record_path = Path(args.record) if args.record else Path(model.unzipdir) / "resources" / DEFAULT_RECORD
-        t, _ = read_record(record_path, float(params.get("g", 9.81)))
+        t, ag = read_record(record_path, float(params.get("g", 9.81)))
         dt = args.dt or float(t[1] - t[0])
         print(f"{record_path.name}: {len(t)} samples, {t[-1]:.2f} s; output every {dt} s", flush=True)
         result = model.run(args.record, params, dt=dt)
+        scene = scene_text(model, params, result["nBlocks"])
+        print(f"scene: {scene}", flush=True)
+        ag = ag * float(params.get("recordScale", 1.0))
     names = ["time"] + [k for k in result if isinstance(result[k], np.ndarray) and k != "time"]
     with open(out / "response.csv", "w", newline="") as f:
         w = csv.writer(f)
@@ -105,7 +135,8 @@ def main(argv=None):
             w.writerow([f"{x:.9g}" for x in row])
     peaks = {"record": str(args.record or DEFAULT_RECORD), **result["peaks"], "params": params}
     (out / "peaks.json").write_text(json.dumps(peaks, indent=2) + "\n")
-    plot(result, f"{record_path.name}: peak drift {1000 * peaks['peakUp']:.1f} mm", out / "response.png")
+    plot(result, f"{scene}\nunder {record_path.name}: peak drift {1000 * peaks['peakUp']:.1f} mm",
+         out / "response.png", ground=(t, ag))
     print(f"peak |up| {peaks['peakUp']:.5f} m, events {peaks['nEvents']}; wrote {out}/response.csv, "
           f"peaks.json, response.png")
 

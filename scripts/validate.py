@@ -27,13 +27,14 @@ import math
 import sys
 from pathlib import Path
 
-import matplotlib
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import use_venv  # noqa: E402,F401  (re-runs this script under the repository's .venv if needed)
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sll import Model  # noqa: E402
 
 G = 9.81

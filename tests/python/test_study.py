@@ -161,3 +161,34 @@ def test_section_4_validation_matches_the_closed_forms(tmp_path):
     assert 0 <= numbers["stick-slip"]["breakaway_error_s"] <= 1e-4
     assert abs(numbers["slip-slip"]["peak_to_peak_rel_error"]) < 1e-4
     assert (tmp_path / "validation.png").stat().st_size > 10_000
+
+
+def test_the_docs_table_is_written_by_the_study(quick, tmp_path):
+    # Issue #25: the documentation's counts come from a run, not from typing. The block between the
+    # markers is exactly what study.docs_table renders; --docs rewrites it and nothing else.
+    docs = ROOT / "docs" / "study-and-advisor.md"
+    text = docs.read_text()
+    assert text.count(study.DOCS_BEGIN) == 1 and text.count(study.DOCS_END) == 1
+    block = text.split(study.DOCS_BEGIN, 1)[1].split(study.DOCS_END, 1)[0]
+    assert "Generated from `study.json` of `study.py --level DBE MCE`" in block
+    assert block.count("\n| ") == 2 + 6  # the header, its rule and the paper's six conclusions
+    meta = json.loads((quick / "study.json").read_text())
+    copy = tmp_path / "page.md"
+    copy.write_text(text)
+    study.write_docs(copy, meta)
+    new = copy.read_text()
+    assert study.docs_table(meta) in new
+    before, after = text.split(study.DOCS_BEGIN)[0], text.split(study.DOCS_END)[1]
+    assert new.startswith(before) and new.endswith(after)
+
+
+@pytest.mark.skipif(not __import__("os").environ.get("SLL_SLOW"),
+                    reason="slow (set SLL_SLOW=1): the full study at both levels, 174 240 simulations, about 1 min")
+def test_the_docs_table_matches_a_full_run(tmp_path):
+    assert study.main(["--out", str(tmp_path), "--level", "DBE", "MCE", "--workers", "2"]) == 0
+    table = study.docs_table(json.loads((tmp_path / "study.json").read_text()))
+    text = (ROOT / "docs" / "study-and-advisor.md").read_text()
+    block = study.DOCS_BEGIN + text.split(study.DOCS_BEGIN, 1)[1].split(study.DOCS_END, 1)[0] + study.DOCS_END
+    # Everything but the timing line is the same.
+    strip = lambda t: [line for line in t.splitlines() if not line.startswith("Generated from")]  # noqa: E731
+    assert strip(block) == strip(table)
