@@ -396,22 +396,44 @@ pub struct Resolved {
 /// consistent, the enumeration of all 3^k picks the least violating one.
 pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     let walk = Walk::new(sys, req);
-    let mut best: Option<(Key, Mode)> = None;
-    let mut count = 0u32;
-    walk.search(&mut |key, mode| {
-        count += 1;
-        if best.is_none_or(|(b, _)| key < b) {
-            best = Some((key, *mode));
-        }
-    });
-    match best {
-        Some((_, mode)) => Resolved {
-            mode,
-            consistent: true,
-            ambiguous: count > 1 && !walk.all_equal_friction(),
-        },
-        None => resolve_by_enumeration(sys, req),
+    let mut search = Search {
+        best: None,
+        count: 0,
+        bound: true,
+        limit: u32::MAX,
+    };
+    walk.search(&mut search);
+    let Some((_, mode)) = search.best else {
+        return resolve_by_enumeration(sys, req);
+    };
+    // Several consistent assignments (the rule decided): possible only
+    // with mus > muk; the bounded walk may have skipped the others.
+    let ambiguous = !walk.all_equal_friction()
+        && (search.count > 1 || {
+            let mut all = Search {
+                best: None,
+                count: 0,
+                bound: false,
+                limit: 2,
+            };
+            walk.search(&mut all);
+            all.count > 1
+        });
+    Resolved {
+        mode,
+        consistent: true,
+        ambiguous,
     }
+}
+
+/// The state of a walk: the best consistent assignment so far and how many
+/// were found; `bound`: drop branches that cannot beat the best on the
+/// rule's first two criteria; `limit`: stop after so many.
+struct Search {
+    best: Option<(Key, Mode)>,
+    count: u32,
+    bound: bool,
+    limit: u32,
 }
 
 /// Rank of a consistent assignment under the selection rule (smaller wins):
@@ -427,6 +449,8 @@ struct Walk<'a> {
     /// Position in the list of interfaces in `zero` (bit index) of each
     /// interface, or `usize::MAX` for the others (their contact is kept).
     index: [usize; MAX_BODIES],
+    /// Number of interfaces in `zero` from j up (entry n + 1: none).
+    remaining: [i32; MAX_BODIES + 1],
 }
 
 /// A cluster being built: its bottom body, its mass so far, and the
@@ -447,7 +471,16 @@ impl<'a> Walk<'a> {
                 k += 1;
             }
         }
-        Walk { sys, req, index }
+        let mut remaining = [0; MAX_BODIES + 1];
+        for j in (1..=sys.n).rev() {
+            remaining[j] = remaining[j + 1] + i32::from(index[j] != usize::MAX);
+        }
+        Walk {
+            sys,
+            req,
+            index,
+            remaining,
+        }
     }
 
     fn all_equal_friction(&self) -> bool {
@@ -456,23 +489,45 @@ impl<'a> Walk<'a> {
             .all(|j| self.sys.mus[j] == self.sys.muk[j])
     }
 
-    /// Calls `found` with the key and mode of every consistent assignment.
-    fn search(&self, found: &mut impl FnMut(Key, &Mode)) {
+    /// Walks the assignments into `search`.
+    fn search(&self, search: &mut Search) {
         let mut mode = self.req.mode;
         let open = Open {
             bottom: 0,
             accel_below: 0.0,
         };
-        self.choose(1, open, &mut mode, found);
+        self.choose(1, open, &mut mode, (0, false), search);
     }
 
     /// Chooses the contact of interface `j` (kept where it is not in
     /// `zero`); a stuck one extends the open cluster, any other closes it.
-    fn choose(&self, j: usize, open: Open, mode: &mut Mode, found: &mut impl FnMut(Key, &Mode)) {
+    /// `(stuck, broken)`: the interfaces of `zero` stuck below `j`, and
+    /// whether one of them is in `must_break`.
+    fn choose(
+        &self,
+        j: usize,
+        open: Open,
+        mode: &mut Mode,
+        (stuck, broken): (i32, bool),
+        search: &mut Search,
+    ) {
+        if search.count >= search.limit {
+            return;
+        }
+        if let (true, Some((best, _))) = (search.bound, &search.best) {
+            // No completion has more stuck interfaces, or loses `broken`.
+            if (broken, -(stuck + self.remaining[j])) > (best.0, best.1) {
+                return;
+            }
+        }
         let n = self.sys.n;
         if j > n {
             if self.close(open, n + 1, mode).is_some() {
-                found(self.key(mode), mode);
+                search.count += 1;
+                let key = self.key(mode);
+                if search.best.is_none_or(|(b, _)| key < b) {
+                    search.best = Some((key, *mode));
+                }
             }
             return;
         }
@@ -487,16 +542,19 @@ impl<'a> Walk<'a> {
         } else {
             options
         };
+        let in_zero = self.index[j] != usize::MAX;
         for &c in options {
             mode.contact[j] = c;
             if c == Contact::Stuck {
-                self.choose(j + 1, open, mode, found);
+                let breaks = in_zero && self.req.must_break & (1 << j) != 0;
+                let counted = (stuck + i32::from(in_zero), broken || breaks);
+                self.choose(j + 1, open, mode, counted, search);
             } else if let Some(accel) = self.close(open, j, mode) {
                 let next = Open {
                     bottom: j,
                     accel_below: accel,
                 };
-                self.choose(j + 1, next, mode, found);
+                self.choose(j + 1, next, mode, (stuck, broken), search);
             }
         }
         mode.contact[j] = self.req.mode.contact[j];
