@@ -299,12 +299,7 @@ impl Simulator {
             self.fire_violated(exc, self.t, all, 0);
         }
         self.take_inputs_now(exc, self.t);
-        let h = if self.exact {
-            self.map_step()
-        } else {
-            self.h_max
-        };
-        Ok(Piece::new(self.t, t_end, exc, h))
+        Ok(Piece::new(self.t, t_end, exc, self.h_max))
     }
 
     /// The inputs at the end of a finished piece.

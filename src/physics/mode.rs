@@ -159,6 +159,12 @@ pub struct Dynamics {
     pub moving: [Moving; MAX_BODIES],
     /// Number of entries of `moving`.
     pub n_moving: usize,
+    /// The band of the structure's absolute acceleration inside which its
+    /// cluster's stuck interfaces hold ([`safe_accel_band`]), if it has any.
+    pub stick_band: Option<(f64, f64)>,
+    /// Direction of slip of moving interface m (between clusters m and
+    /// m + 1; 0 for a free one).
+    pub slip_sign: [f64; MAX_BODIES],
 }
 
 impl Dynamics {
@@ -197,6 +203,15 @@ impl Dynamics {
             };
             d.n_guards += 1;
         }
+        let guards = &d.guards[..d.n_guards];
+        if guards.iter().any(|g| matches!(g, Guard::Stuck { .. })) {
+            d.stick_band = Some(safe_accel_band(guards));
+        }
+        for g in guards {
+            if let Guard::Slip { lo, sign, .. } = *g {
+                d.slip_sign[lo] = sign;
+            }
+        }
         d
     }
 
@@ -223,6 +238,8 @@ impl Dynamics {
             n_guards: 0,
             moving: [Moving { j: 0, hi: 0, lo: 0 }; MAX_BODIES],
             n_moving: 0,
+            stick_band: None,
+            slip_sign: [0.0; MAX_BODIES],
         };
         for i in 0..=sys.n {
             if i == 0 || !mode.is_stuck(i) {

@@ -28,7 +28,6 @@ use super::pieces::is_jump;
 use super::proofs::{in_band_proved, raise_peak_proved, slip_guard_proved, structure_peaks_proved};
 use super::{move_bodies, Excitation, Piece, Simulator};
 use crate::physics::hermite;
-use crate::physics::mode::{safe_accel_band, Guard};
 use crate::physics::params::MAX_BODIES;
 
 /// Sums over a run of the products `z_i z_j` and of `z_i`, for the
@@ -150,19 +149,15 @@ impl Simulator {
         piece: &mut Piece,
         pieces: &mut impl Iterator<Item = (f64, Excitation)>,
     ) -> Option<(f64, Excitation)> {
-        let h_max = self.map_step();
+        let h_max = self.h_max;
         let (sys, d, maps) = (&self.sys, &self.dynamics, &mut self.maps);
         debug_assert_eq!(d.n_clusters, NC);
         // Constants of the mode.
-        let guards = &d.guards[..d.n_guards];
-        let (band_lo, band_hi) = safe_accel_band(guards);
-        let has_band = guards.iter().any(|g| matches!(g, Guard::Stuck { .. }));
-        let mut slip_sign = [0.0; NC];
-        for g in guards {
-            if let Guard::Slip { lo, sign, .. } = *g {
-                slip_sign[lo] = sign;
-            }
-        }
+        let (has_band, (band_lo, band_hi)) = match d.stick_band {
+            Some(band) => (true, band),
+            None => (false, (0.0, 0.0)),
+        };
+        let slip_sign: [f64; NC] = std::array::from_fn(|m| d.slip_sign[m]);
         let iface: [usize; NC] = std::array::from_fn(|m| {
             if NC > 1 {
                 d.moving[m.min(NC.saturating_sub(2))].j
