@@ -116,6 +116,36 @@ def test_record_file_in_one_step_matches_the_engine_and_an_input_derivative_driv
         assert abs(s.getReal([peak])[0] - ref["peakUp"]) <= 1e-12 * ref["peakUp"]
 
 
+def test_a_ramp_of_fext_through_input_derivatives_needs_no_sub_steps(fmu):
+    """Issue #21 through the FMU binary: default scene, no record,
+    der(Fext) = 1e6 N/s for one fmi2DoStep of 0.05 s against the same ramp in
+    400 steps (value and derivative set at each). Expected: equal drift and
+    friction work to 1e-9 (both are exact; the Rust suite checks them against
+    the exact reference), Efriction > 0, and the FMU's own serialized state
+    accepted. The defect gave 0.0136 m and -0.070 J against 0.0196 m, 8.87 J."""
+
+    def ramp(steps: int) -> list[float]:
+        with sll.Model(fmu) as m:
+            s = m.slave
+            s.setupExperiment(startTime=0.0)
+            s.enterInitializationMode()
+            s.exitInitializationMode()
+            fext = m.vr("Fext")
+            h = 0.05 / steps
+            for k in range(steps):
+                s.setReal([fext], [1e6 * k * h])
+                s.setRealInputDerivatives([fext], [1], [1e6])
+                s.doStep(k * h, h)
+            state = s.serializeFMUstate(s.getFMUstate())
+            s.setFMUstate(s.deSerializeFMUstate(state))
+            return s.getReal([m.vr("up"), m.vr("Efriction")])
+
+    (up1, ef1), (up400, ef400) = ramp(1), ramp(400)
+    assert abs(up1 - up400) <= 1e-9 * abs(up400)
+    assert abs(ef1 - ef400) <= 1e-9 * ef400
+    assert up1 > 0.019 and ef1 > 8.0
+
+
 def test_state_round_trips_and_reset(fmu):
     with sll.Model(fmu) as m:
         s = m.slave
