@@ -221,6 +221,8 @@ pub(super) fn dot(a: &[f64; 4], z: &[f64; 4]) -> f64 {
 pub(super) struct MapCache {
     maps: Vec<ExactMap>,
     next: usize,
+    /// The map found last.
+    last: usize,
 }
 
 /// How many maps are kept (then the oldest is replaced).
@@ -229,11 +231,19 @@ const CACHE_SIZE: usize = 16;
 impl MapCache {
     /// Index of the map for `mass` and canonical `h`, built if missing.
     pub(super) fn index(&mut self, sys: &System, mass: f64, h: f64) -> usize {
+        // The map of the previous call first: a mode's run and the next
+        // call of a master with a fixed step ask for it again.
+        if let Some(m) = self.maps.get(self.last) {
+            if m.mass == mass && m.h == h {
+                return self.last;
+            }
+        }
         if let Some(i) = self.maps.iter().position(|m| m.mass == mass && m.h == h) {
+            self.last = i;
             return i;
         }
         let map = ExactMap::new(sys, mass, h);
-        if self.maps.len() < CACHE_SIZE {
+        self.last = if self.maps.len() < CACHE_SIZE {
             self.maps.push(map);
             self.maps.len() - 1
         } else {
@@ -241,7 +251,8 @@ impl MapCache {
             self.maps[i] = map;
             self.next = (i + 1) % CACHE_SIZE;
             i
-        }
+        };
+        self.last
     }
 
     pub(super) fn get(&self, i: usize) -> &ExactMap {
