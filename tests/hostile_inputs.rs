@@ -463,18 +463,30 @@ fn non_finite_results_are_an_error_naming_the_variable_and_time() {
     assert_eq!(set(&mut inst, Id::Ag, 1e300), Status::Error);
     assert!(log.last().contains("ag = "), "{}", log.last());
     // The largest allowed inputs and slopes, on the heaviest scene: finite.
+    // (The slopes take each input from one end of its range to its middle.)
     let (mut inst, log, status) = init(|inst| {
         set(inst, Id::Mp, 1e12);
         set(inst, Id::Alpha(1), 1e9);
-        set(inst, Id::Ag, 1e6);
+        set(inst, Id::Ag, -1e6);
         set(inst, Id::Fext, -1e18);
     });
     assert_eq!(status, Status::Ok, "{}", log.last());
     assert_eq!(
-        inst.set_input_derivatives(&[Id::Ag.vr(), Id::Fext.vr()], &[1, 1], &[-1e9, 1e21]),
+        inst.set_input_derivatives(&[Id::Ag.vr(), Id::Fext.vr()], &[1, 1], &[1e9, 1e21]),
         Status::Ok
     );
-    assert_eq!(inst.do_step(0.0, 1.0), Status::Ok, "{}", log.last());
+    assert_eq!(inst.do_step(0.0, 1e-3), Status::Ok, "{}", log.last());
+    let mut inputs = [0.0; 2];
+    assert_eq!(
+        inst.get_real(&[Id::Ag.vr(), Id::Fext.vr()], &mut inputs),
+        Status::Ok
+    );
+    assert_eq!(inputs, [-1e6 + 1e9 * 1e-3, -1e18 + 1e21 * 1e-3]);
+    assert!(
+        inputs[0].abs() < 1e-6 && inputs[1].abs() < 1e6,
+        "{inputs:?}"
+    );
+    assert_eq!(inst.do_step(1e-3, 1.0), Status::Ok, "{}", log.last());
     assert_outputs_finite(&mut inst, "largest inputs");
     // (The check behind every step, `limits::first_non_finite`, is unit-tested
     // in src/limits.rs; corrupted saved states reach it in the fuzz below.)

@@ -351,6 +351,8 @@ pub struct Resolved {
     /// False when no assignment satisfied the contact law within
     /// [`CONSISTENCY_TOL`] and the least violating one was taken.
     pub consistent: bool,
+    /// Assignments tried (the work of the resolution).
+    pub tries: u32,
 }
 
 /// Finds a consistent mode: every interface in `zero` is stuck, or starts
@@ -377,6 +379,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     }
     let zero = &zero_list[..k];
     let mut fallback: Option<(f64, Mode)> = None;
+    let mut tries = 0;
     for allow_breaking in [false, true] {
         for size in (0..=k).rev() {
             let mut best: Option<(u32, Mode)> = None;
@@ -406,6 +409,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
                         };
                     }
                     let v = violation(sys, &mode, req.zero, req.load0);
+                    tries += 1;
                     if v <= CONSISTENCY_TOL {
                         best = Some((kept, mode));
                         break;
@@ -419,6 +423,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
                 return Resolved {
                     mode,
                     consistent: true,
+                    tries,
                 };
             }
         }
@@ -426,6 +431,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     Resolved {
         mode: fallback.map_or(req.mode, |(_, m)| m),
         consistent: false,
+        tries,
     }
 }
 
@@ -434,6 +440,11 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
 /// means the selection rule of [`resolve`] decided. Only mus > muk can make
 /// it exceed one, so the enumeration (3^k modes) is skipped otherwise.
 pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
+    consistent_count_and_tries(sys, req).0
+}
+
+/// [`consistent_count`] and the assignments it tried (its work).
+pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u32) {
     let mut list = [0usize; MAX_BODIES];
     let mut k = 0;
     for j in (1..=sys.n).filter(|&j| req.zero & (1 << j) != 0 && !sys.is_free(j)) {
@@ -442,10 +453,11 @@ pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
     }
     let zero = &list[..k];
     if zero.iter().all(|&j| sys.mus[j] == sys.muk[j]) {
-        return 1;
+        return (1, 0);
     }
     let mut count = 0;
-    for code in 0..3u32.pow(k as u32) {
+    let tries = 3u32.pow(k as u32);
+    for code in 0..tries {
         let mut mode = req.mode;
         let mut rest = code;
         for &j in zero {
@@ -457,7 +469,7 @@ pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
             count += 1;
         }
     }
-    count
+    (count, tries)
 }
 
 /// The `size`-element subsets of `k` items as bit masks, in increasing

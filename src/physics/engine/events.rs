@@ -141,6 +141,7 @@ impl Simulator {
             load0: self.load0(),
         };
         let res = mode::resolve(&self.sys, &req);
+        self.tries += u64::from(res.tries);
         if !res.consistent {
             self.stats.inconsistent += 1;
         }
@@ -148,8 +149,12 @@ impl Simulator {
             // Counted at switches only: the count tries all 3^k assignments,
             // too costly for the resolutions that keep the mode (a stuck
             // stack under a moving force re-resolves at every jump).
-            if res.consistent && req.zero != 0 && mode::consistent_count(&self.sys, &req) > 1 {
-                self.stats.ambiguous += 1;
+            if res.consistent && req.zero != 0 {
+                let (count, tries) = mode::consistent_count_and_tries(&self.sys, &req);
+                self.tries += u64::from(tries);
+                if count > 1 {
+                    self.stats.ambiguous += 1;
+                }
             }
             self.stats.events += 1;
             self.last_event = self.t;

@@ -186,6 +186,7 @@ impl Simulator {
             // The event path takes the rest of that sample interval.
             let (t1, exc) = s.piece(stop.k, self.t);
             self.exact_interval(t1, &exc)?;
+            self.check_work()?;
             k = stop.k + 1;
         }
         self.t = s.time[last];
