@@ -9,7 +9,7 @@
 //! the work it counted and, when it finished, the switches.
 use stacked_live_load::fmi::instance::{Instance, LogSink, Status};
 use stacked_live_load::fmi::variables::Id;
-use stacked_live_load::ground::record;
+use stacked_live_load::ground::{record, synthetic};
 use stacked_live_load::{limits, GroundMotion, Params, Settings, Simulator};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -23,21 +23,6 @@ impl LogSink for Last {
     }
 }
 
-/// A square wave of amplitude `a` and frequency `f` as a record: each
-/// half period held, the jump between halves over 1 µs (the shortest step
-/// of a record).
-fn square_wave_csv(seconds: f64, f: f64, a: f64) -> String {
-    let half = 0.5 / f;
-    let n = (seconds / half).ceil() as usize;
-    let mut text = String::with_capacity(n * 60);
-    for k in 0..n {
-        let sign = if k % 2 == 0 { a } else { -a };
-        let t0 = k as f64 * half;
-        text.push_str(&format!("{t0:.9},{sign}\n{:.9},{sign}\n", t0 + half - 1e-6));
-    }
-    text
-}
-
 fn main() {
     let mut args = std::env::args().skip(1);
     let seconds: f64 = args.next().map_or(310.0, |s| s.parse().unwrap());
@@ -46,7 +31,11 @@ fn main() {
     let dir = std::env::temp_dir().join(format!("sll_work_bound_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("square.csv");
-    std::fs::write(&file, square_wave_csv(seconds, 1000.0, 5.0)).unwrap();
+    let wave = synthetic::square_wave(seconds, 1000.0, 5.0);
+    let text: String = (wave.time.iter().zip(&wave.accel))
+        .map(|(t, a)| format!("{t:.9},{a}\n"))
+        .collect();
+    std::fs::write(&file, text).unwrap();
 
     let log = Last::default();
     let mut inst = Instance::new("work_bound", None, Box::new(log.clone()), false);

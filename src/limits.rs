@@ -113,12 +113,19 @@ pub fn quote(text: &str) -> String {
     format!("`{out}`")
 }
 
+/// The work of covering `length` (s) in internal steps of at most `h_max`
+/// with `samples` record samples inside, each step weighing `weight`: what
+/// is counted up front.
+pub fn work_estimate(length: f64, h_max: f64, samples: usize, weight: f64) -> f64 {
+    (length / h_max + samples as f64) * weight
+}
+
 /// The error of a call that would need more than [`MAX_STEPS_PER_CALL`]
 /// internal steps, or `None` when it fits. `length` is the interval (s),
 /// `h_max` the largest internal step, `samples` the record samples inside,
 /// `weight` the cost of one internal step in exact-engine steps.
 pub fn work_error(length: f64, h_max: f64, samples: usize, weight: f64) -> Option<String> {
-    let steps = length / h_max + samples as f64;
+    let steps = work_estimate(length, h_max, samples, 1.0);
     (steps * weight > MAX_STEPS_PER_CALL).then(|| {
         let counted = if weight == 1.0 {
             String::new()
