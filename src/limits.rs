@@ -83,6 +83,12 @@ pub fn time_tolerance(time: f64, start: f64, steps: u64) -> f64 {
     ((steps as f64 + 4.0) * ulp(scale)).min(1e-9 * scale)
 }
 
+/// Whether time `t` is at most `stop`, up to 1e-9 of it (fmpy takes a
+/// communication point within that of the stop time as the stop time).
+pub fn within_stop(t: f64, stop: f64) -> bool {
+    t <= stop + 1e-9 * stop.abs().max(1.0)
+}
+
 /// Whether `dt`, the step of a record between samples near time `t` (as read
 /// from a file), is at least [`MIN_RECORD_DT`] up to the rounding of the
 /// file's decimal times: 1e-9 of the step, and 4 units in the last place of

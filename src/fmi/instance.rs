@@ -148,8 +148,8 @@ pub struct Instance {
     /// (needed only by a relative `recordFile`).
     resource_dir: Result<PathBuf, String>,
     record: Option<(RecordKey, Arc<GroundMotion>)>,
-    /// The cached record was checked against its file since the last
-    /// fmi2Reset (a restored state of this run reuses it unread).
+    /// The cached record was read or checked against its file since the
+    /// last fmi2Reset (this run reuses it unread).
     record_checked: bool,
     outputs: Option<Outputs>,
     d: Dynamic,
@@ -260,6 +260,7 @@ impl Instance {
         }
         let in_range = |t: f64| t.abs() <= limits::MAX_TIME;
         if !in_range(start) || stop.is_some_and(|s| !(in_range(s) && s >= start)) {
+            // (limits::MAX_TIME: at 1e16 s a step of 1 s would round away.)
             let stop = stop.map_or("none".to_string(), |s| limits::Num(s).to_string());
             return self.error(
                 F,
@@ -303,7 +304,7 @@ impl Instance {
             },
         )
         .map_err(|e| self.error(func, e.to_string()))?;
-        self.load_record(func, false)?;
+        self.load_record(func)?;
         if let Some(message) = limits::non_finite_message(&sim.outputs(), self.d.start_time) {
             return Err(self.error(func, message));
         }
@@ -336,10 +337,10 @@ impl Instance {
         }
     }
 
-    /// Reads the record `recordFile` names, or reuses the one read before
-    /// if its file still holds the same bytes (`restoring`: a state of this
-    /// run, whose record was checked since the last fmi2Reset).
-    fn load_record(&mut self, func: &str, restoring: bool) -> Result<(), Status> {
+    /// Reads the record `recordFile` names, or reuses the one read before:
+    /// unread within a run (since the last fmi2Reset), and after it if its
+    /// file still holds the same bytes.
+    fn load_record(&mut self, func: &str) -> Result<(), Status> {
         let file = self.d.values.record_file.clone();
         if file.is_empty() {
             self.record = None;
@@ -352,7 +353,7 @@ impl Instance {
         let g_bits = self.d.values.params.g.to_bits();
         let same_file = |k: &RecordKey| k.path == path && k.g_bits == g_bits;
         if let Some((key, _)) = self.record.as_ref().filter(|(k, _)| same_file(k)) {
-            if restoring && self.record_checked {
+            if self.record_checked {
                 return Ok(());
             }
             let known = key.fingerprint;

@@ -207,7 +207,7 @@ impl Instance {
             );
         }
         if let Some(stop) = self.d.stop_time {
-            if end > stop + 1e-9 * stop.abs().max(1.0) {
+            if !limits::within_stop(end, stop) {
                 return self.error(
                     F,
                     format!(
