@@ -139,7 +139,7 @@ def test_second_round_time_locations_and_work_through_fmpy(fmu, tmp_path):
         a = 5.0 if k % 2 == 0 else -5.0
         rows += [f"{k * 5e-4:.9f},{a}", f"{k * 5e-4 + 5e-4 - 1e-6:.9f},{a}"]
     square.write_text("\n".join(rows) + "\n")
-    (tmp_path / "default_record.csv").write_text("0,0\n1,100\n")  # never read
+    (tmp_path / "default_record.csv").write_text("not a record\n")  # never read
     code = CHILD_PRELUDE + f"""
 import time
 from ctypes import byref
