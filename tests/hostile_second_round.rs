@@ -4,7 +4,7 @@
 //! (this test binary again, test `child_entry`, [`common::in_child`]).
 
 mod common;
-use common::Capture;
+use common::{started, Capture};
 use stacked_live_load::fmi::c_api::{self, catch_quietly};
 use stacked_live_load::fmi::instance::{Instance, Status};
 use stacked_live_load::fmi::variables::{self, Causality, Id, Kind};
@@ -46,21 +46,6 @@ fn write_csv(path: &Path, gm: &GroundMotion) {
         .map(|(t, a)| format!("{t:.17e},{a:.17e}\n"))
         .collect();
     std::fs::write(path, text).unwrap();
-}
-
-/// An initialized instance from `start` (no stop time) after `setup`.
-fn started(start: f64, setup: impl FnOnce(&mut Instance)) -> (Instance, Capture) {
-    let (mut inst, log) = common::instance("second");
-    assert_eq!(inst.setup_experiment(start, None), Status::Ok);
-    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
-    setup(&mut inst);
-    assert_eq!(
-        inst.exit_initialization_mode(),
-        Status::Ok,
-        "{}",
-        log.last()
-    );
-    (inst, log)
 }
 
 fn next_up(x: f64) -> f64 {

@@ -284,21 +284,29 @@ mod tests {
         for (uri, path) in ok {
             assert_eq!(win(uri).as_deref(), Ok(path), "{uri}");
         }
-        for (uri, why) in [
-            ("file:///dir/resources", "neither a drive"),
-            ("file:relative/dir", "neither a drive"),
-            ("file:C:dir", "not followed by a separator"),
-            ("file://server", "without a server or share"),
-            ("file:///C:/%E9t%E9", "not UTF-8"),
-        ] {
-            let e = win(uri).unwrap_err();
+        assert_refused(
+            Style::Windows,
+            &[
+                ("file:///dir/resources", "neither a drive"),
+                ("file:relative/dir", "neither a drive"),
+                ("file:C:dir", "not followed by a separator"),
+                ("file://server", "without a server or share"),
+                ("file:///C:/%E9t%E9", "not UTF-8"),
+            ],
+        );
+    }
+
+    /// Each location refused in `style` with a reason containing its text.
+    fn assert_refused(style: Style, cases: &[(&str, &str)]) {
+        for (uri, why) in cases {
+            let e = parse(uri.as_bytes(), style).unwrap_err();
             assert!(e.contains(why), "{uri}: {e}");
         }
     }
 
     #[test]
     fn unusable_locations_are_named() {
-        for (uri, why) in [
+        let cases = [
             ("", "empty"),
             ("http://example.com/resources", "not a `file:` URI"),
             ("file:", "not absolute"),
@@ -311,10 +319,8 @@ mod tests {
             ("file:///tmp/a%00b", "NUL"),
             ("file:///tmp/a?x=1", "query or fragment"),
             ("file:///tmp/a#frag", "query or fragment"),
-        ] {
-            let e = unix(uri).unwrap_err();
-            assert!(e.contains(why), "{uri}: {e}");
-        }
+        ];
+        assert_refused(Style::Unix, &cases);
         assert_eq!(resource_dir(None).unwrap_err(), "it is NULL");
         let long = format!("file:///{}", "é".repeat(500));
         assert!(shown(long.as_bytes()).chars().count() <= MAX_SHOWN + 3);

@@ -504,6 +504,22 @@ pub fn instance(name: &str) -> (Instance, Capture) {
     (Instance::new(name, None, Box::new(log.clone()), false), log)
 }
 
+/// An instance initialized from `start` (no stop time) after `setup`;
+/// fails the test if initialization does.
+pub fn started(start: f64, setup: impl FnOnce(&mut Instance)) -> (Instance, Capture) {
+    let (mut inst, log) = instance("test");
+    assert_eq!(inst.setup_experiment(start, None), Status::Ok);
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    setup(&mut inst);
+    assert_eq!(
+        inst.exit_initialization_mode(),
+        Status::Ok,
+        "{}",
+        log.last()
+    );
+    (inst, log)
+}
+
 /// The benchmarks' stacks (`benches/frontier.rs`, `examples/scaling.rs`):
 /// the paper's two blocks (`Params::default`), and above them lighter, less
 /// rough blocks, friction falling upwards but never equal to the one below
