@@ -102,6 +102,8 @@ pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
     if !same_solver {
         return Err("the saved simulator is not the one its saved parameters build".into());
     }
+    // The force the engine holds is an input too.
+    check_scalar("Fext", sim.fext_now()).map_err(|e| format!("saved simulator's {e}"))?;
     // The FMU's time is the start plus the simulator's own, as every step
     // leaves it.
     if (d.start_time + sim.time()).to_bits() != d.time.to_bits() {
