@@ -175,8 +175,8 @@ impl Instance {
                 F,
                 format!(
                     "currentCommunicationPoint = {} does not match the FMU's time {} \
-                     (they may differ by rounding only, here {} s): step from the time \
-                     the last step ended (fmi2LastSuccessfulTime)",
+                     (they may differ by rounding only: at most {} s here); step from the \
+                     time the last step ended (fmi2LastSuccessfulTime)",
                     Num(t),
                     Num(now),
                     Num(tol)
