@@ -219,8 +219,8 @@ fn every_field_of_a_saved_state_is_checked_against_the_setters_ranges() {
     inst.set_input_derivatives(&[Id::Ag.vr()], &[1], &[7.25e-2]);
     let blob = Instance::serialize(&inst.save().unwrap());
     assert!(Instance::deserialize(&blob).is_ok());
-    let times = offset_of(&blob, start); // start, stop, time, steps, tSwitch
-    let (time, t_switch) = (times + 16, times + 32);
+    let times = offset_of(&blob, start); // start, stop, time, stop flag, steps, tSwitch
+    let (time, t_switch) = (times + 16, times + 33);
     let now = inst.last_successful_time();
     let f = |x: f64| x.to_le_bytes();
     let refused: Vec<(&str, usize, [u8; 8])> = vec![
@@ -268,8 +268,28 @@ fn every_field_of_a_saved_state_is_checked_against_the_setters_ranges() {
     assert_eq!(inst.restore(&state), Status::Ok);
     assert_eq!(get(&mut inst, Id::Ag), -9.5e5);
     // Any count of steps only widens the time tolerance, up to its cap.
-    let steps = with_word(&blob, times + 24, u64::MAX.to_le_bytes());
+    let steps = with_word(&blob, times + 25, u64::MAX.to_le_bytes());
     assert!(Instance::deserialize(&steps).is_ok());
+    // A stop time is a flag and a value: a NaN or a stop before the time is
+    // refused, an unknown flag too.
+    let (mut inst, _) = common::instance("stop");
+    assert_eq!(inst.setup_experiment(0.0, Some(12.75)), Status::Ok);
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(inst.exit_initialization_mode(), Status::Ok);
+    assert_eq!(inst.do_step(0.0, 0.5), Status::Ok);
+    let blob = Instance::serialize(&inst.save().unwrap());
+    let stop = offset_of(&blob, 12.75);
+    for (what, bad) in [
+        ("stop NaN", with_word(&blob, stop, f(f64::NAN))),
+        ("stop before the time", with_word(&blob, stop, f(0.25))),
+        ("stop flag 7", {
+            let mut b = blob.clone();
+            b[stop + 16] = 7;
+            b
+        }),
+    ] {
+        assert!(Instance::deserialize(&bad).is_err(), "{what}");
+    }
 }
 
 // ---- 6. inputs and setters ----

@@ -176,7 +176,13 @@ impl Instance {
                     None => "fmi2Instantiate was given no fmuResourceLocation (NULL)".into(),
                 }
             });
-        Instance::with_resource_dir(name, dir, logger, logging_on)
+        let inst = Instance::with_resource_dir(name, dir, logger, logging_on);
+        if let Err(why) = &inst.resource_dir {
+            inst.debug(&format!(
+                "fmi2Instantiate: {why}; a relative recordFile will be refused"
+            ));
+        }
+        inst
     }
 
     /// A new instance whose resources folder is `resource_dir` (or the

@@ -168,7 +168,8 @@ impl Instance {
         w.buf.extend_from_slice(STATE_MAGIC);
         w.u32(STATE_VERSION);
         w.u8(d.phase as u8);
-        w.f64s(&[d.start_time, d.stop_time.unwrap_or(f64::NAN), d.time]);
+        w.f64s(&[d.start_time, d.stop_time.unwrap_or(0.0), d.time]);
+        w.u8(u8::from(d.stop_time.is_some()));
         w.u64(d.steps);
         w.f64(d.t_switch);
         let v = &d.values;
@@ -213,6 +214,11 @@ impl Instance {
             x => return Err(format!("unknown phase {x}")),
         };
         let (start_time, stop, time) = (r.f64()?, r.f64()?, r.f64()?);
+        let stop_time = match r.u8()? {
+            0 => None,
+            1 => Some(stop),
+            x => return Err(format!("unknown stop-time flag {x}")),
+        };
         let steps = r.u64()?;
         let t_switch = r.f64()?;
         let mut values = ParameterValues {
@@ -241,7 +247,7 @@ impl Instance {
         let d = Dynamic {
             phase,
             start_time,
-            stop_time: (!stop.is_nan()).then_some(stop),
+            stop_time,
             time,
             steps,
             t_switch,
