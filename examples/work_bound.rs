@@ -80,9 +80,11 @@ fn main() {
     // The same scene on the engine directly, without a bound: what the
     // work counts and what it costs (ENGINE=1).
     if std::env::var("ENGINE").is_ok_and(|v| v == "1") {
-        let mut p = Params::default();
-        p.n_blocks = n_blocks as usize;
-        p.tp = tp;
+        let mut p = Params {
+            n_blocks: n_blocks as usize,
+            tp,
+            ..Params::default()
+        };
         if let Some(mu) = std::env::var("MU").ok().and_then(|s| s.parse::<f64>().ok()) {
             p.mus = [mu; 8];
             p.muk = [mu; 8];
