@@ -746,7 +746,13 @@ fn fuzz_call_sequences(cases: usize) {
                     hostile[rng.below(hostile.len())],
                 ),
                 1 => inst.do_step(t, [0.0, 1e-3, 0.05, 1.0][rng.below(4)]),
-                2 => inst.do_step(t + hostile[rng.below(hostile.len())], 0.01),
+                2 if rng.below(2) == 0 => inst.do_step(t + hostile[rng.below(hostile.len())], 0.01),
+                // A point a few units in the last place off, a step of 0 or not.
+                2 => {
+                    let ulps = rng.below(13) as i64 - 6;
+                    let off = f64::from_bits((t.to_bits() as i64 + ulps) as u64);
+                    inst.do_step(off, [0.0, 0.01][rng.below(2)])
+                }
                 3 => {
                     saved = inst.save().ok();
                     Status::Ok
@@ -765,6 +771,20 @@ fn fuzz_call_sequences(cases: usize) {
             if status == Status::Ok && readable {
                 assert_outputs_finite(&mut inst, &format!("call sequence case {case}"));
             }
+            // The FMU never refuses its own state, and its time never falls
+            // below the start.
+            if let Ok(state) = inst.save() {
+                let blob = Instance::serialize(&state);
+                if let Err(e) = Instance::deserialize(&blob) {
+                    panic!("call sequence case {case}: its own state refused: {e}");
+                }
+            }
+            let start = if inst.phase() == Phase::Instantiated {
+                0.0
+            } else {
+                -1.0
+            };
+            assert!(inst.last_successful_time() >= start, "case {case}");
         }
     }
     eprintln!("{cases} call sequences of 8 calls");
