@@ -134,8 +134,11 @@ extern "C" {
  *
  * Returns 0 (fmi2OK), or 3 (fmi2Error) with a message naming the set and
  * the variable and its allowed range, or the record's file, line and
- * problem; the results of the sets before a bad one are written. A panic
- * never crosses this boundary (it is reported as an error).
+ * problem; the results of the sets before a bad one are written. One call
+ * does at most the work of one `fmi2DoStep` (`limits::MAX_STEPS_PER_CALL`):
+ * refused up front from the sets' internal steps and the record's samples,
+ * stopped when switches spend the rest. A panic never crosses this
+ * boundary (it is reported as an error, nothing is printed).
  */
 int sllRunBatch(const char *recordFile,
                 double g,

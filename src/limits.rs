@@ -45,11 +45,58 @@ pub const MAX_TIME: f64 = 1e9;
 pub const MAX_PATH_BYTES: usize = 4096;
 /// Most characters of a file's content a message quotes.
 pub const MAX_QUOTE_CHARS: usize = 24;
-/// Most internal steps one call may take (one `fmi2DoStep`): a few seconds
-/// of work for the exact engine, which takes 30-70 ns per step. Record
-/// samples in the interval count as steps; a step of solver 2 counts as 3,
-/// one of solver 3 as [`regularized_step_weight`].
+/// Most work one call may do (one `fmi2DoStep`, one `sllRunBatch`), in
+/// units of one internal step of the exact engine (30-70 ns): a few seconds.
+/// Counted up front, where it can be known: the internal steps of the
+/// interval and the record samples inside it (a step of solver 2 counts as
+/// 3, one of solver 3 as [`regularized_step_weight`]); counted as it
+/// happens: every internal step, [`SWITCH_WORK`] per stick/slip switch and
+/// [`TRY_WORK`] per mode the resolver tries (the engine's work budget).
 pub const MAX_STEPS_PER_CALL: f64 = 1e8;
+
+/// The work of one stick/slip switch beyond the resolver's tries, in
+/// internal steps: locating it, rebuilding the mode's dynamics and the
+/// substep around it (measured about 3 µs with 1 to 8 blocks, where an
+/// internal step takes about 50 ns: `examples/work_bound.rs`).
+pub const SWITCH_WORK: u64 = 64;
+
+/// The work of one assignment the mode resolver tries, in internal steps
+/// (measured about 0.1 µs with 8 blocks).
+pub const TRY_WORK: u64 = 2;
+
+/// The distance from `x` to the next double away from zero (the unit in
+/// the last place; the smallest subnormal at 0).
+pub fn ulp(x: f64) -> f64 {
+    let a = x.abs();
+    if !a.is_finite() {
+        return f64::NAN;
+    }
+    f64::from_bits(a.to_bits() + 1) - a
+}
+
+/// How far a master's `currentCommunicationPoint` may be from the FMU's
+/// time: the rounding of two clocks that added the same `steps` step sizes
+/// in a different order or frame, `steps + 4` units in the last place of the
+/// larger of the time and the start time, and never more than 1e-9 of it.
+pub fn time_tolerance(time: f64, start: f64, steps: u64) -> f64 {
+    let scale = time.abs().max(start.abs());
+    ((steps as f64 + 4.0) * ulp(scale)).min(1e-9 * scale)
+}
+
+/// Whether time `t` is at most `stop`, up to 1e-9 of it (fmpy takes a
+/// communication point within that of the stop time as the stop time).
+pub fn within_stop(t: f64, stop: f64) -> bool {
+    t <= stop + 1e-9 * stop.abs().max(1.0)
+}
+
+/// Whether `dt`, the step of a record between samples near time `t` (as read
+/// from a file), is at least [`MIN_RECORD_DT`] up to the rounding of the
+/// file's decimal times: 1e-9 of the step, and 4 units in the last place of
+/// `t` (a CSV written every microsecond up to 10 s has steps 2e-15 s short).
+/// The one rule of every reader.
+pub fn record_step_allowed(dt: f64, t: f64) -> bool {
+    dt >= MIN_RECORD_DT * (1.0 - 1e-9) - 4.0 * ulp(t)
+}
 
 /// What one internal step of solver 3 costs in steps of the exact engine:
 /// it evaluates every interface's `tanh` 6 times a step (four RK4 stages and
@@ -72,12 +119,19 @@ pub fn quote(text: &str) -> String {
     format!("`{out}`")
 }
 
+/// The work of covering `length` (s) in internal steps of at most `h_max`
+/// with `samples` record samples inside, each step weighing `weight`: what
+/// is counted up front.
+pub fn work_estimate(length: f64, h_max: f64, samples: usize, weight: f64) -> f64 {
+    (length / h_max + samples as f64) * weight
+}
+
 /// The error of a call that would need more than [`MAX_STEPS_PER_CALL`]
 /// internal steps, or `None` when it fits. `length` is the interval (s),
 /// `h_max` the largest internal step, `samples` the record samples inside,
 /// `weight` the cost of one internal step in exact-engine steps.
 pub fn work_error(length: f64, h_max: f64, samples: usize, weight: f64) -> Option<String> {
-    let steps = length / h_max + samples as f64;
+    let steps = work_estimate(length, h_max, samples, 1.0);
     (steps * weight > MAX_STEPS_PER_CALL).then(|| {
         let counted = if weight == 1.0 {
             String::new()

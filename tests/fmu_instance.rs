@@ -12,17 +12,7 @@ fn instance() -> (Instance, Capture) {
 }
 
 fn initialized_with_log(setup: impl FnOnce(&mut Instance)) -> (Instance, Capture) {
-    let (mut inst, log) = instance();
-    assert_eq!(inst.setup_experiment(0.0, None), Status::Ok);
-    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
-    setup(&mut inst);
-    assert_eq!(
-        inst.exit_initialization_mode(),
-        Status::Ok,
-        "{}",
-        log.last()
-    );
-    (inst, log)
+    common::started(0.0, setup)
 }
 
 fn initialized(setup: impl FnOnce(&mut Instance)) -> Instance {

@@ -17,7 +17,6 @@ use stacked_live_load::fmi::variables::{self, Causality, Id, Kind};
 use stacked_live_load::limits;
 use stacked_live_load::GroundMotion;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 fn instance() -> (Instance, Capture) {
@@ -57,6 +56,28 @@ fn assert_outputs_finite(inst: &mut Instance, what: &str) {
     }
 }
 
+/// Every output derivative (orders 1 and 2) of the continuous outputs:
+/// fails the test on a non-finite one behind fmi2OK (solver 3 has none).
+fn assert_derivatives_finite(inst: &mut Instance, what: &str) {
+    let ids: Vec<Id> = real_outputs()
+        .into_iter()
+        .filter(|id| id.is_continuous())
+        .collect();
+    for order in [1, 2] {
+        let vrs: Vec<u32> = ids.iter().map(|id| id.vr()).collect();
+        let mut out = vec![f64::NAN; vrs.len()];
+        if inst.get_output_derivatives(&vrs, &vec![order; vrs.len()], &mut out) == Status::Ok {
+            for (id, x) in ids.iter().zip(&out) {
+                assert!(
+                    x.is_finite(),
+                    "{what}: d{order} {} = {x} behind fmi2OK",
+                    id.name()
+                );
+            }
+        }
+    }
+}
+
 fn temp_dir() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("sll_hostile_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -83,60 +104,9 @@ fn record_refused(path: &Path, expected: &[&str]) -> String {
 
 // ---- the child-process harness ----
 
-/// Runs case `case` in a child process; fails if it does not end within
-/// `limit` (a hang) or ends with a failure or a signal (an abort).
+/// Runs case `case` in a child process ([`common::in_child`]).
 fn in_child(case: &str, limit: Duration) {
-    let exe = std::env::current_exe().unwrap();
-    let stderr_path = temp_dir().join(format!("{case}.stderr"));
-    let stderr = std::fs::File::create(&stderr_path).unwrap();
-    let mut command = Command::new(exe);
-    command
-        .args(["child_entry", "--exact", "--nocapture", "--test-threads=1"])
-        .env("SLL_HOSTILE_CASE", case)
-        .stdout(Stdio::null())
-        .stderr(stderr);
-    #[cfg(unix)]
-    unsafe {
-        use std::os::unix::process::CommandExt;
-        // Bounded memory: an allocation of what a file claims fails here
-        // (and must become an fmi2Error, not an abort).
-        command.pre_exec(|| {
-            let limit = libc::rlimit {
-                rlim_cur: 4 << 30,
-                rlim_max: 4 << 30,
-            };
-            libc::setrlimit(libc::RLIMIT_AS, &limit);
-            Ok(())
-        });
-    }
-    let started = Instant::now();
-    let mut child = command.spawn().unwrap();
-    let status = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status;
-        }
-        if started.elapsed() > limit {
-            child.kill().ok();
-            child.wait().ok();
-            panic!("case `{case}` still running after {limit:?}: it hangs");
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    };
-    let err = std::fs::read_to_string(&stderr_path).unwrap_or_default();
-    assert!(
-        status.success(),
-        "case `{case}` ended with {status}:\n{err}"
-    );
-    // The child's own summary lines (they start with a count).
-    let summary: Vec<&str> = err
-        .lines()
-        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
-        .collect();
-    eprintln!(
-        "case `{case}`: {:.2} s {}",
-        started.elapsed().as_secs_f64(),
-        summary.join("; ")
-    );
+    common::in_child(case, limit, &temp_dir(), |_| {});
 }
 
 /// The entry point of the child processes (does nothing in a normal run).
@@ -463,18 +433,30 @@ fn non_finite_results_are_an_error_naming_the_variable_and_time() {
     assert_eq!(set(&mut inst, Id::Ag, 1e300), Status::Error);
     assert!(log.last().contains("ag = "), "{}", log.last());
     // The largest allowed inputs and slopes, on the heaviest scene: finite.
+    // (The slopes take each input from one end of its range to its middle.)
     let (mut inst, log, status) = init(|inst| {
         set(inst, Id::Mp, 1e12);
         set(inst, Id::Alpha(1), 1e9);
-        set(inst, Id::Ag, 1e6);
+        set(inst, Id::Ag, -1e6);
         set(inst, Id::Fext, -1e18);
     });
     assert_eq!(status, Status::Ok, "{}", log.last());
     assert_eq!(
-        inst.set_input_derivatives(&[Id::Ag.vr(), Id::Fext.vr()], &[1, 1], &[-1e9, 1e21]),
+        inst.set_input_derivatives(&[Id::Ag.vr(), Id::Fext.vr()], &[1, 1], &[1e9, 1e21]),
         Status::Ok
     );
-    assert_eq!(inst.do_step(0.0, 1.0), Status::Ok, "{}", log.last());
+    assert_eq!(inst.do_step(0.0, 1e-3), Status::Ok, "{}", log.last());
+    let mut inputs = [0.0; 2];
+    assert_eq!(
+        inst.get_real(&[Id::Ag.vr(), Id::Fext.vr()], &mut inputs),
+        Status::Ok
+    );
+    assert_eq!(inputs, [-1e6 + 1e9 * 1e-3, -1e18 + 1e21 * 1e-3]);
+    assert!(
+        inputs[0].abs() < 1e-6 && inputs[1].abs() < 1e6,
+        "{inputs:?}"
+    );
+    assert_eq!(inst.do_step(1e-3, 1.0), Status::Ok, "{}", log.last());
     assert_outputs_finite(&mut inst, "largest inputs");
     // (The check behind every step, `limits::first_non_finite`, is unit-tested
     // in src/limits.rs; corrupted saved states reach it in the fuzz below.)
@@ -685,6 +667,7 @@ fn try_blob(blob: &[u8], rng: &mut Rng) -> bool {
         let h = [0.0, 0.01, 0.2][rng.below(3)];
         if inst.do_step(t, h) == Status::Ok {
             assert_outputs_finite(&mut inst, "after a restored state");
+            assert_derivatives_finite(&mut inst, "after a restored state");
         }
     }
     true
@@ -763,7 +746,13 @@ fn fuzz_call_sequences(cases: usize) {
                     hostile[rng.below(hostile.len())],
                 ),
                 1 => inst.do_step(t, [0.0, 1e-3, 0.05, 1.0][rng.below(4)]),
-                2 => inst.do_step(t + hostile[rng.below(hostile.len())], 0.01),
+                2 if rng.below(2) == 0 => inst.do_step(t + hostile[rng.below(hostile.len())], 0.01),
+                // A point a few units in the last place off, a step of 0 or not.
+                2 => {
+                    let ulps = rng.below(13) as i64 - 6;
+                    let off = f64::from_bits((t.to_bits() as i64 + ulps) as u64);
+                    inst.do_step(off, [0.0, 0.01][rng.below(2)])
+                }
                 3 => {
                     saved = inst.save().ok();
                     Status::Ok
@@ -782,6 +771,20 @@ fn fuzz_call_sequences(cases: usize) {
             if status == Status::Ok && readable {
                 assert_outputs_finite(&mut inst, &format!("call sequence case {case}"));
             }
+            // The FMU never refuses its own state, and its time never falls
+            // below the start.
+            if let Ok(state) = inst.save() {
+                let blob = Instance::serialize(&state);
+                if let Err(e) = Instance::deserialize(&blob) {
+                    panic!("call sequence case {case}: its own state refused: {e}");
+                }
+            }
+            let start = if inst.phase() == Phase::Instantiated {
+                0.0
+            } else {
+                -1.0
+            };
+            assert!(inst.last_successful_time() >= start, "case {case}");
         }
     }
     eprintln!("{cases} call sequences of 8 calls");

@@ -8,11 +8,12 @@
 //! parameters and `recordFile` does in one `fmi2DoStep` over the record.
 #![allow(non_snake_case, clippy::missing_safety_doc)]
 
+use crate::fmi::c_api::catch_quietly;
 use crate::ground::record::{self, GroundMotion};
+use crate::limits;
 use crate::physics::params::{check_scalar, Params, Settings, MAX_BLOCKS};
-use crate::Simulator;
+use crate::{SimError, Simulator};
 use std::ffi::{c_char, c_int, CStr};
-use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// Doubles per parameter set: `nBlocks` (an integer 0..8), `mp`, `Tp`,
 /// `zeta`, then `alpha[1..8]`, `mus[1..8]`, `muk[1..8]` (entries beyond
@@ -34,8 +35,11 @@ pub const BATCH_OUTPUTS: usize = 5 + MAX_BLOCKS;
 ///
 /// Returns 0 (fmi2OK), or 3 (fmi2Error) with a message naming the set and
 /// the variable and its allowed range, or the record's file, line and
-/// problem; the results of the sets before a bad one are written. A panic
-/// never crosses this boundary (it is reported as an error).
+/// problem; the results of the sets before a bad one are written. One call
+/// does at most the work of one `fmi2DoStep` (`limits::MAX_STEPS_PER_CALL`):
+/// refused up front from the sets' internal steps and the record's samples,
+/// stopped when switches spend the rest. A panic never crosses this
+/// boundary (it is reported as an error, nothing is printed).
 #[no_mangle]
 pub unsafe extern "C" fn sllRunBatch(
     recordFile: *const c_char,
@@ -47,7 +51,7 @@ pub unsafe extern "C" fn sllRunBatch(
     message: *mut c_char,
     messageSize: usize,
 ) -> c_int {
-    let result = catch_unwind(AssertUnwindSafe(|| {
+    let result = catch_quietly(|| {
         if recordFile.is_null() || (nSets > 0 && (params.is_null() || outputs.is_null())) {
             return Err("recordFile, params and outputs must not be NULL".to_string());
         }
@@ -63,19 +67,43 @@ pub unsafe extern "C" fn sllRunBatch(
         let n = nSets as usize;
         let params = std::slice::from_raw_parts(params, n * BATCH_PARAMS);
         let outputs = std::slice::from_raw_parts_mut(outputs, n * BATCH_OUTPUTS);
+        // The work bound of one call, up front: every set's internal steps
+        // over the record and its samples, and building it.
+        let mut estimate = 0.0;
+        for (set, p) in params.chunks_exact(BATCH_PARAMS).enumerate() {
+            let sim = simulator(p, g).map_err(|e| format!("set {set}: {e}"))?;
+            let steps =
+                limits::work_estimate(gm.duration(), sim.max_internal_step(), gm.time.len(), 1.0);
+            estimate += steps + SET_WORK;
+            if estimate > limits::MAX_STEPS_PER_CALL {
+                return Err(format!(
+                    "the sets up to set {set} would take about {estimate:.3e} internal steps \
+                     (set {set}: internal step {:.3e} s over the record's {} s and {} samples), \
+                     more than the limit of {:e} per call: split the sets into several calls, \
+                     or shorten the record",
+                    sim.max_internal_step(),
+                    limits::Num(gm.duration()),
+                    gm.time.len(),
+                    limits::MAX_STEPS_PER_CALL
+                ));
+            }
+        }
+        // And as it is done (switches count too): what is left of it.
+        let mut left = limits::MAX_STEPS_PER_CALL as u64;
         for (set, (p, out)) in params
             .chunks_exact(BATCH_PARAMS)
             .zip(outputs.chunks_exact_mut(BATCH_OUTPUTS))
             .enumerate()
         {
-            run_set(p, g, &gm, recordScale, out).map_err(|e| format!("set {set}: {e}"))?;
+            run_set(p, g, &gm, recordScale, out, &mut left)
+                .map_err(|e| format!("set {set}: {e}"))?;
         }
         Ok(())
-    }));
+    });
     let error = match result {
         Ok(Ok(())) => return 0,
         Ok(Err(e)) => e,
-        Err(_) => "internal error (a panic was caught)".to_string(),
+        Err(text) => format!("internal error (a panic was caught): {text}"),
     };
     if !message.is_null() && messageSize > 0 {
         let text = format!("sllRunBatch: {error}");
@@ -86,14 +114,12 @@ pub unsafe extern "C" fn sllRunBatch(
     3
 }
 
-/// One parameter set over the record.
-fn run_set(
-    p: &[f64],
-    g: f64,
-    gm: &GroundMotion,
-    scale: f64,
-    out: &mut [f64],
-) -> Result<(), String> {
+/// The work of building one set's simulator, counted up front (in internal
+/// steps: a few microseconds).
+const SET_WORK: f64 = 64.0;
+
+/// The simulator of one parameter set.
+fn simulator(p: &[f64], g: f64) -> Result<Simulator, String> {
     let n = p[0];
     if !(n.fract() == 0.0 && (0.0..=MAX_BLOCKS as f64).contains(&n)) {
         return Err(format!(
@@ -112,8 +138,36 @@ fn run_set(
     params.alpha.copy_from_slice(&p[4..4 + b]);
     params.mus.copy_from_slice(&p[4 + b..4 + 2 * b]);
     params.muk.copy_from_slice(&p[4 + 2 * b..4 + 3 * b]);
-    let mut sim = Simulator::new(&params, &Settings::default()).map_err(|e| e.to_string())?;
-    record::run(&mut sim, gm, scale).map_err(|e| e.to_string())?;
+    Simulator::new(&params, &Settings::default()).map_err(|e| e.to_string())
+}
+
+/// One parameter set over the record, within `left` units of work (what
+/// it does is taken from `left`).
+fn run_set(
+    p: &[f64],
+    g: f64,
+    gm: &GroundMotion,
+    scale: f64,
+    out: &mut [f64],
+    left: &mut u64,
+) -> Result<(), String> {
+    let mut sim = simulator(p, g)?;
+    sim.set_work_budget(*left);
+    let result = record::run(&mut sim, gm, scale);
+    *left = left.saturating_sub(sim.work());
+    match result {
+        Ok(()) => {}
+        Err(SimError::WorkLimit { t }) => {
+            return Err(format!(
+                "stopped at t = {} s of the record: the stick/slip switches spent the work \
+                 bound of one call ({:e} internal steps' worth, a few seconds); split the sets \
+                 into several calls",
+                limits::Num(t),
+                limits::MAX_STEPS_PER_CALL
+            ))
+        }
+        Err(e) => return Err(e.to_string()),
+    }
     let o = sim.outputs();
     out[..5].copy_from_slice(&[
         o.peak_up,
@@ -174,7 +228,7 @@ mod tests {
         assert_eq!(status, 0);
         for (k, p) in sets.chunks(BATCH_PARAMS).enumerate() {
             let mut want = vec![0.0; BATCH_OUTPUTS];
-            run_set(p, 9.81, &read, 1.0, &mut want).unwrap();
+            run_set(p, 9.81, &read, 1.0, &mut want, &mut { u64::MAX }).unwrap();
             assert_eq!(&out[k * BATCH_OUTPUTS..(k + 1) * BATCH_OUTPUTS], &want[..]);
         }
         assert!(out[BATCH_OUTPUTS + 3] > 0.0, "the 2-block set switches");

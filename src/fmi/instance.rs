@@ -11,12 +11,14 @@
 //! - `stepping`: fmi2DoStep, input and output derivatives, status queries;
 //! - `saved_state`: fmi2Get/SetFMUstate, their byte format and its checks.
 
+use crate::fmi::resource_location;
+use crate::ground::formats;
 use crate::ground::record::GroundMotion;
 use crate::limits;
 use crate::physics::engine::{Excitation, Outputs};
 use crate::physics::params::{ParamError, Params};
 use crate::physics::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
 
 mod saved_state;
@@ -99,7 +101,11 @@ struct Dynamic {
     phase: Phase,
     start_time: f64,
     stop_time: Option<f64>,
+    /// The FMU's time: `start_time` plus the simulator's own time.
     time: f64,
+    /// Steps of positive size since initialization (the rounding two clocks
+    /// can differ by grows with it: [`limits::time_tolerance`]).
+    steps: u64,
     /// `tSwitch`: the first switch inside the last step, or its end.
     t_switch: f64,
     values: ParameterValues,
@@ -117,6 +123,7 @@ impl Dynamic {
             start_time: 0.0,
             stop_time: None,
             time: 0.0,
+            steps: 0,
             t_switch: 0.0,
             values: ParameterValues::default(),
             ag: 0.0,
@@ -137,43 +144,52 @@ pub struct Instance {
     name: String,
     logger: Box<dyn LogSink>,
     debug_logging: bool,
-    resource_dir: Option<PathBuf>,
+    /// The resources folder, or why the importer's location names none
+    /// (needed only by a relative `recordFile`).
+    resource_dir: Result<PathBuf, String>,
     record: Option<(RecordKey, Arc<GroundMotion>)>,
+    /// The cached record was read or checked against its file since the
+    /// last fmi2Reset (this run reuses it unread).
+    record_checked: bool,
     outputs: Option<Outputs>,
     d: Dynamic,
 }
 
-/// Parses `file:///a/b`, `file:/a/b` or `file://localhost/a/b` (percent-decoded).
-pub fn resource_dir_from_uri(uri: &str) -> Option<PathBuf> {
-    let rest = uri.strip_prefix("file:")?;
-    let path = if let Some(r) = rest.strip_prefix("//") {
-        &r[r.find('/')?..]
-    } else {
-        rest
-    };
-    let bytes = path.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%' && i + 2 < bytes.len() {
-            if let Ok(b) = u8::from_str_radix(&path[i + 1..i + 3], 16) {
-                out.push(b);
-                i += 3;
-                continue;
-            }
-        }
-        out.push(bytes[i]);
-        i += 1;
-    }
-    Some(PathBuf::from(String::from_utf8(out).ok()?))
-}
-
 impl Instance {
     /// A new instance in state `Instantiated`; `resource_location` is the
-    /// importer's `file:` URI of the unzipped FMU's resources folder.
+    /// importer's `file:` URI of the unzipped FMU's resources folder (see
+    /// [`resource_location`]; an unusable one is an error only when a
+    /// relative `recordFile` needs it).
     pub fn new(
         name: &str,
         resource_location: Option<&str>,
+        logger: Box<dyn LogSink>,
+        logging_on: bool,
+    ) -> Instance {
+        let dir =
+            resource_location::resource_dir(resource_location.map(str::as_bytes)).map_err(|why| {
+                match resource_location {
+                    Some(uri) => format!(
+                        "fmuResourceLocation `{}` names no folder: {why}",
+                        resource_location::shown(uri.as_bytes())
+                    ),
+                    None => "fmi2Instantiate was given no fmuResourceLocation (NULL)".into(),
+                }
+            });
+        let inst = Instance::with_resource_dir(name, dir, logger, logging_on);
+        if let Err(why) = &inst.resource_dir {
+            inst.debug(&format!(
+                "fmi2Instantiate: {why}; a relative recordFile will be refused"
+            ));
+        }
+        inst
+    }
+
+    /// A new instance whose resources folder is `resource_dir` (or the
+    /// reason there is none), for an importer that gives a path.
+    pub fn with_resource_dir(
+        name: &str,
+        resource_dir: Result<PathBuf, String>,
         logger: Box<dyn LogSink>,
         logging_on: bool,
     ) -> Instance {
@@ -181,8 +197,9 @@ impl Instance {
             name: name.to_string(),
             logger,
             debug_logging: logging_on,
-            resource_dir: resource_location.and_then(resource_dir_from_uri),
+            resource_dir,
             record: None,
+            record_checked: false,
             outputs: None,
             d: Dynamic::initial(),
         }
@@ -249,6 +266,7 @@ impl Instance {
         }
         let in_range = |t: f64| t.abs() <= limits::MAX_TIME;
         if !in_range(start) || stop.is_some_and(|s| !(in_range(s) && s >= start)) {
+            // (limits::MAX_TIME: at 1e16 s a step of 1 s would round away.)
             let stop = stop.map_or("none".to_string(), |s| limits::Num(s).to_string());
             return self.error(
                 F,
@@ -301,29 +319,73 @@ impl Instance {
         Ok(())
     }
 
+    /// The record file's path: absolute as given, or relative to the FMU's
+    /// resources folder (never to the process's working directory).
+    fn record_path(&self, file: &str) -> Result<PathBuf, String> {
+        let path = Path::new(file);
+        if path.is_absolute() {
+            return Ok(path.to_path_buf());
+        }
+        // `\\dir` or `C:dir` on Windows: rooted or prefixed but not absolute,
+        // relative to a current drive or folder.
+        if path.has_root() || matches!(path.components().next(), Some(Component::Prefix(_))) {
+            return Err(format!(
+                "`{file}` is neither an absolute path nor one relative to the FMU's resources \
+                 folder (it depends on the process's current drive)"
+            ));
+        }
+        match &self.resource_dir {
+            Ok(dir) => Ok(dir.join(path)),
+            Err(why) => Err(format!(
+                "`{file}` is a relative path, read from the FMU's resources folder, but {why}; \
+                 give an absolute path"
+            )),
+        }
+    }
+
+    /// Reads the record `recordFile` names, or reuses the one read before:
+    /// unread within a run (since the last fmi2Reset), and after it if its
+    /// file still holds the same bytes.
     fn load_record(&mut self, func: &str) -> Result<(), Status> {
         let file = self.d.values.record_file.clone();
         if file.is_empty() {
             self.record = None;
             return Ok(());
         }
-        let path = Path::new(&file);
-        let path = match (&self.resource_dir, path.is_absolute()) {
-            (Some(dir), false) => dir.join(path),
-            _ => path.to_path_buf(),
+        let path = match self.record_path(&file) {
+            Ok(path) => path,
+            Err(e) => return Err(self.error(func, format!("recordFile: {e}"))),
         };
-        let key = RecordKey::of(&path, self.d.values.params.g);
-        if self.record.as_ref().is_some_and(|(k, _)| *k == key) {
-            return Ok(());
+        let g_bits = self.d.values.params.g.to_bits();
+        let same_file = |k: &RecordKey| k.path == path && k.g_bits == g_bits;
+        if let Some((key, _)) = self.record.as_ref().filter(|(k, _)| same_file(k)) {
+            if self.record_checked {
+                return Ok(());
+            }
+            let known = key.fingerprint;
+            match formats::fingerprint(&path) {
+                Ok(now) if now == known => {
+                    self.record_checked = true;
+                    return Ok(());
+                }
+                Ok(_) => {}
+                Err(e) => return Err(self.error(func, format!("recordFile: {e}"))),
+            }
         }
-        match GroundMotion::read(&path, self.d.values.params.g) {
-            Ok(gm) => {
+        match GroundMotion::read_with_fingerprint(&path, self.d.values.params.g) {
+            Ok((gm, fingerprint)) => {
                 self.debug(&format!(
                     "recordFile: read {} samples from {}",
                     gm.time.len(),
                     path.display()
                 ));
+                let key = RecordKey {
+                    path,
+                    g_bits,
+                    fingerprint,
+                };
                 self.record = Some((key, Arc::new(gm)));
+                self.record_checked = true;
                 Ok(())
             }
             Err(e) => Err(self.error(func, format!("recordFile: {e}"))),
@@ -356,35 +418,26 @@ impl Instance {
     }
 
     /// Back to the state after instantiation: default values everywhere.
-    /// (A record already read stays cached under its file name.)
+    /// (A record already read stays cached, and is read again unless its
+    /// file holds the same bytes.)
     pub fn reset(&mut self) -> Status {
         self.d = Dynamic::initial();
         self.outputs = None;
+        self.record_checked = false;
         Status::Ok
     }
 }
 
-/// What a parsed record depends on: the file (path, size, modification time)
-/// and `g` (AT2 files are in units of g). A study reuses a parsed record across
-/// fmi2Reset; a file rewritten in between, or another g, is read again.
+/// What a parsed record depends on: the file's path and content (a keyed
+/// hash of its bytes, [`formats::fingerprint`]) and `g` (AT2 files are in
+/// units of g). A study reuses a parsed record across fmi2Reset; a file
+/// rewritten in between (even with the same size and modification time), or
+/// another g, is read again.
 #[derive(Clone, Debug, PartialEq)]
 struct RecordKey {
-    path: std::path::PathBuf,
-    stamp: Option<(u64, std::time::SystemTime)>,
+    path: PathBuf,
     g_bits: u64,
-}
-
-impl RecordKey {
-    fn of(path: &Path, g: f64) -> RecordKey {
-        let stamp = std::fs::metadata(path)
-            .ok()
-            .and_then(|m| Some((m.len(), m.modified().ok()?)));
-        RecordKey {
-            path: path.to_path_buf(),
-            stamp,
-            g_bits: g.to_bits(),
-        }
-    }
+    fingerprint: formats::Fingerprint,
 }
 
 /// A sink that drops everything.

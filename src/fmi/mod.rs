@@ -6,6 +6,7 @@
 //! - [`variables`]: the variable table (names, value references, starts).
 //! - [`model_description`]: `modelDescription.xml`, generated from the table.
 //! - [`ports`]: the outputs' input dependencies and time derivatives.
+//! - [`resource_location`]: `fmuResourceLocation` (a `file:` URI) as a folder.
 //! - [`batch`]: `sllRunBatch`, many parameter sets over one record in one
 //!   call (beside the FMI API, for parametric studies).
 
@@ -14,4 +15,5 @@ pub mod c_api;
 pub mod instance;
 pub mod model_description;
 pub mod ports;
+pub mod resource_location;
 pub mod variables;

@@ -7,12 +7,97 @@
 
 use super::record::{GroundMotion, RecordError};
 use crate::limits::{
-    quote, Num, MAX_RECORD_ACCEL, MAX_RECORD_BYTES, MAX_RECORD_LINE, MAX_RECORD_SAMPLES,
-    MAX_RECORD_TIME, MIN_RECORD_DT,
+    quote, record_step_allowed, Num, MAX_RECORD_ACCEL, MAX_RECORD_BYTES, MAX_RECORD_LINE,
+    MAX_RECORD_SAMPLES, MAX_RECORD_TIME, MIN_RECORD_DT,
 };
+use std::collections::hash_map::RandomState;
 use std::fs::File;
+use std::hash::{BuildHasher, Hasher};
 use std::io::{BufRead, BufReader, Read, Take};
 use std::path::Path;
+use std::sync::OnceLock;
+
+/// The content of a file as far as a cache needs it: its length and a hash
+/// of its bytes keyed with this process's random key (so no file can be
+/// made to collide with another on purpose).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Fingerprint {
+    len: u64,
+    hash: u64,
+}
+
+/// Hashes a byte stream in fixed blocks, so the hash does not depend on how
+/// the stream was cut into reads.
+struct BlockHasher {
+    hasher: std::hash::DefaultHasher,
+    block: Box<[u8; 8192]>,
+    filled: usize,
+    len: u64,
+}
+
+impl BlockHasher {
+    fn new() -> BlockHasher {
+        static KEY: OnceLock<RandomState> = OnceLock::new();
+        BlockHasher {
+            hasher: KEY.get_or_init(RandomState::new).build_hasher(),
+            block: Box::new([0; 8192]),
+            filled: 0,
+            len: 0,
+        }
+    }
+
+    fn add(&mut self, mut bytes: &[u8]) {
+        self.len += bytes.len() as u64;
+        while !bytes.is_empty() {
+            let n = bytes.len().min(self.block.len() - self.filled);
+            self.block[self.filled..self.filled + n].copy_from_slice(&bytes[..n]);
+            self.filled += n;
+            bytes = &bytes[n..];
+            if self.filled == self.block.len() {
+                self.hasher.write(&self.block[..]);
+                self.filled = 0;
+            }
+        }
+    }
+
+    fn finish(mut self) -> Fingerprint {
+        self.hasher.write(&self.block[..self.filled]);
+        self.hasher.write_u64(self.len);
+        Fingerprint {
+            len: self.len,
+            hash: self.hasher.finish(),
+        }
+    }
+}
+
+/// A reader that hashes what passes through it.
+struct Hashing<'h, R> {
+    inner: R,
+    hasher: &'h mut BlockHasher,
+}
+
+impl<R: Read> Read for Hashing<'_, R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.hasher.add(&buf[..n]);
+        Ok(n)
+    }
+}
+
+/// The fingerprint of a record file's content, read as the readers read it
+/// (a regular file of at most [`MAX_RECORD_BYTES`], never blocking).
+pub fn fingerprint(path: &Path) -> Result<Fingerprint, RecordError> {
+    let name = path.display().to_string();
+    let (file, _) = open_regular(path, &name)?;
+    let mut hasher = BlockHasher::new();
+    let mut reader = Hashing {
+        inner: file,
+        hasher: &mut hasher,
+    };
+    std::io::copy(&mut reader, &mut std::io::sink())
+        .map_err(|e| err(&name, 0, format!("cannot read the file: {e}")))?;
+    Ok(hasher.finish())
+}
 
 impl GroundMotion {
     /// Reads a `.AT2` (by extension, case-insensitive) or CSV file; AT2
@@ -20,17 +105,33 @@ impl GroundMotion {
     /// opened (a FIFO, device or directory is refused before opening, so
     /// nothing blocks), and every size is bounded (see [`crate::limits`]).
     pub fn read(path: &Path, g: f64) -> Result<GroundMotion, RecordError> {
+        GroundMotion::read_with_fingerprint(path, g).map(|(gm, _)| gm)
+    }
+
+    /// As [`GroundMotion::read`], with the [`fingerprint`] of the bytes it
+    /// parsed (hashed as they were read: a file changing meanwhile gives
+    /// the fingerprint of what was parsed).
+    pub fn read_with_fingerprint(
+        path: &Path,
+        g: f64,
+    ) -> Result<(GroundMotion, Fingerprint), RecordError> {
         let name = path.display().to_string();
-        let (reader, size) = open_regular(path, &name)?;
+        let (file, size) = open_regular(path, &name)?;
+        let mut hasher = BlockHasher::new();
+        let reader = BufReader::new(Hashing {
+            inner: file,
+            hasher: &mut hasher,
+        });
         let lines = BoundedLines::new(reader, &name);
         let is_at2 = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("at2"));
-        if is_at2 {
+        let gm = if is_at2 {
             parse_at2(lines, size, &name, g)
         } else {
             parse_csv(lines, &name)
-        }
+        }?;
+        Ok((gm, hasher.finish()))
     }
 
     /// Parses a single-column file (one acceleration per line, no header, `#`
@@ -42,8 +143,15 @@ impl GroundMotion {
         dt: f64,
         factor: f64,
     ) -> Result<GroundMotion, RecordError> {
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(err(name, 0, format!("dt = {} must be positive", Num(dt))));
+        if !(dt.is_finite() && record_step_allowed(dt, 0.0)) {
+            return Err(err(
+                name,
+                0,
+                format!(
+                    "dt = {} is not allowed: it must be finite and at least {MIN_RECORD_DT:e} s",
+                    Num(dt)
+                ),
+            ));
         }
         let mut values = Vec::new();
         for line in text_lines(text, name) {
@@ -69,6 +177,13 @@ impl GroundMotion {
         if values.len() < 2 {
             return Err(err(name, 0, "a record needs at least two samples"));
         }
+        if dt * (values.len() - 1) as f64 > MAX_RECORD_TIME {
+            return Err(err(
+                name,
+                0,
+                format!("the record lasts more than {MAX_RECORD_TIME:e} s"),
+            ));
+        }
         uniform_checked(dt, values, name)
     }
 
@@ -89,7 +204,7 @@ fn err(file: &str, line: usize, message: impl Into<String>) -> RecordError {
 /// Opens `path` if it is a regular file of at most [`MAX_RECORD_BYTES`]:
 /// checked before opening (a FIFO would block `open`, a device never ends)
 /// and again on the open file. Returns the reader and the file's size.
-fn open_regular(path: &Path, name: &str) -> Result<(BufReader<Take<File>>, u64), RecordError> {
+fn open_regular(path: &Path, name: &str) -> Result<(Take<File>, u64), RecordError> {
     let cannot = |e: std::io::Error| err(name, 0, format!("cannot read the file: {e}"));
     let regular = |meta: &std::fs::Metadata| {
         if !meta.is_file() {
@@ -123,7 +238,7 @@ fn open_regular(path: &Path, name: &str) -> Result<(BufReader<Take<File>>, u64),
     let file = options.open(path).map_err(cannot)?;
     let size = regular(&file.metadata().map_err(cannot)?)?;
     // A file growing while it is read still stops at the limit.
-    Ok((BufReader::new(file.take(MAX_RECORD_BYTES + 1)), size))
+    Ok((file.take(MAX_RECORD_BYTES + 1), size))
 }
 
 /// Lines of a record, numbered from 1, split at LF with every CR shown as
@@ -274,7 +389,7 @@ fn check_header(n: f64, dt: f64, size: u64, file: &str) -> Result<usize, RecordE
             Num(n)
         ));
     }
-    if !(dt >= MIN_RECORD_DT && dt * (n - 1.0) <= MAX_RECORD_TIME) {
+    if !(record_step_allowed(dt, 0.0) && dt * (n - 1.0) <= MAX_RECORD_TIME) {
         return e(format!(
             "DT = {} is not allowed: it must be at least {MIN_RECORD_DT:e} s, with NPTS DT at most {MAX_RECORD_TIME:e} s",
             Num(dt)
@@ -382,7 +497,7 @@ fn parse_csv(
         }
         let a = check_accel(row[1], file, no, fields[1])?;
         if let Some(&last) = time.last() {
-            if row[0] - last < MIN_RECORD_DT {
+            if !record_step_allowed(row[0] - last, row[0]) {
                 return Err(err(
                     file,
                     no,

@@ -3,10 +3,11 @@
 //!
 //! - [`record`]: the [`GroundMotion`](record::GroundMotion) table and
 //!   stepping a simulator through one.
-//! - `formats` (private): the file readers, `GroundMotion::read`,
-//!   `from_csv_text` and `from_single_column`, with their safety limits.
+//! - [`formats`]: the file readers, `GroundMotion::read`,
+//!   `from_csv_text` and `from_single_column`, with their safety limits, and
+//!   the fingerprint of a file's content (the FMU's record cache).
 //! - [`synthetic`]: broadband synthetic records and the embedded default.
 
-mod formats;
+pub mod formats;
 pub mod record;
 pub mod synthetic;

@@ -5,6 +5,25 @@
 use crate::ground::record::GroundMotion;
 use std::f64::consts::PI;
 
+/// A square wave of amplitude `a` (m/s²) and frequency `f` (Hz) over
+/// `duration` s: each half period held, the jump between halves over 1 µs
+/// (the shortest step of a record). A chattering load for the work bound.
+pub fn square_wave(duration: f64, f: f64, a: f64) -> GroundMotion {
+    let half = 0.5 / f;
+    let n = (duration / half).ceil() as usize;
+    let mut gm = GroundMotion {
+        time: Vec::with_capacity(2 * n),
+        accel: Vec::with_capacity(2 * n),
+    };
+    for k in 0..n {
+        let value = if k % 2 == 0 { a } else { -a };
+        let t0 = k as f64 * half;
+        gm.time.extend([t0, t0 + half - 1e-6]);
+        gm.accel.extend([value, value]);
+    }
+    gm
+}
+
 /// A sum of 40 sines log-spaced from 0.2 to 20 Hz, amplitudes falling as
 /// 1/sqrt(f), phases from a fixed-seed generator, under a 2 s build-up and an
 /// exponential decay after mid-record; scaled to peak `pga` (m/s^2).

@@ -22,6 +22,7 @@
 //! resolution, the baseline's step), `report` (outputs, counters, errors),
 //! `saved_state` and `state_check` (saved states and their validation).
 
+use crate::limits::{SWITCH_WORK, TRY_WORK};
 use crate::physics::hermite;
 use crate::physics::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
 use crate::physics::params::{Method, ParamError, Params, Settings, MAX_BLOCKS, MAX_BODIES};
@@ -85,6 +86,11 @@ pub struct Simulator {
     /// The first switch at or after `watch_from` (NaN: none yet).
     first_switch: f64,
     stats: Stats,
+    /// Assignments the mode resolver tried (its work; not saved).
+    tries: u64,
+    /// `advance*` stop with [`SimError::WorkLimit`] once [`Simulator::work`]
+    /// passes this (`set_work_budget`).
+    work_limit: u64,
 }
 
 impl Simulator {
@@ -119,6 +125,8 @@ impl Simulator {
             watch_from: f64::INFINITY,
             first_switch: f64::NAN,
             stats: Stats::default(),
+            tries: 0,
+            work_limit: u64::MAX,
         };
         if sim.exact {
             sim.h_max = sim.map_step();
@@ -203,6 +211,31 @@ impl Simulator {
         self.stats
     }
 
+    /// The work done so far, in internal steps: every internal step,
+    /// [`SWITCH_WORK`] per switch and [`TRY_WORK`] per assignment the mode
+    /// resolver tried.
+    pub fn work(&self) -> u64 {
+        let s = &self.stats;
+        s.steps
+            .saturating_add(SWITCH_WORK.saturating_mul(s.events))
+            .saturating_add(TRY_WORK.saturating_mul(self.tries))
+    }
+
+    /// From now on, `advance*` stop with [`SimError::WorkLimit`] at the end
+    /// of the first substep after which [`Simulator::work`] has grown by
+    /// more than `units` (the state is then a substep's end).
+    pub fn set_work_budget(&mut self, units: u64) {
+        self.work_limit = self.work().saturating_add(units);
+    }
+
+    /// The error of a spent work budget, checked between substeps.
+    fn check_work(&self) -> Result<(), SimError> {
+        if self.work() > self.work_limit {
+            return Err(SimError::WorkLimit { t: self.t });
+        }
+        Ok(())
+    }
+
     /// Current stick/slip mode.
     pub fn mode(&self) -> &Mode {
         &self.mode
@@ -263,10 +296,12 @@ impl Simulator {
                     }
                     self.exact_substep(piece.end_of(piece.i), &piece);
                     piece.i += 1;
+                    self.check_work()?;
                 },
                 Method::StepEnd => {
                     for i in 1..=piece.n {
                         self.step_switch_at_end(piece.end_of(i), &exc, piece.t_ref);
+                        self.check_work()?;
                     }
                     pending = pieces.next();
                 }

@@ -392,6 +392,8 @@ pub struct Resolved {
     /// Whether the selection rule chose among several consistent
     /// assignments (possible only with mus > muk at an interface in `zero`).
     pub ambiguous: bool,
+    /// Assignments tried (the work of the resolution).
+    pub tries: u32,
 }
 
 /// Finds a consistent mode: every interface in `zero` is stuck, or starts
@@ -418,10 +420,13 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
         count: 0,
         bound: true,
         limit: u32::MAX,
+        tries: 0,
     };
     walk.search(&mut search);
     let Some((_, mode)) = search.best else {
-        return resolve_by_enumeration(sys, req);
+        let mut all = resolve_by_enumeration(sys, req);
+        all.tries += search.tries;
+        return all;
     };
     // Several consistent assignments (the rule decided): possible only
     // with mus > muk; the bounded walk may have skipped the others.
@@ -432,14 +437,17 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
                 count: 0,
                 bound: false,
                 limit: 2,
+                tries: 0,
             };
             walk.search(&mut all);
+            search.tries += all.tries;
             all.count > 1
         });
     Resolved {
         mode,
         consistent: true,
         ambiguous,
+        tries: search.tries,
     }
 }
 
@@ -451,6 +459,8 @@ struct Search {
     count: u32,
     bound: bool,
     limit: u32,
+    /// Clusters closed (the walk's work, as the enumeration's tries).
+    tries: u32,
 }
 
 /// Rank of a consistent assignment under the selection rule (smaller wins):
@@ -539,6 +549,7 @@ impl<'a> Walk<'a> {
         }
         let n = self.sys.n;
         if j > n {
+            search.tries += 1;
             if self.close(open, n + 1, mode).is_some() {
                 search.count += 1;
                 let key = self.key(mode);
@@ -566,7 +577,10 @@ impl<'a> Walk<'a> {
                 let breaks = in_zero && self.req.must_break & (1 << j) != 0;
                 let counted = (stuck + i32::from(in_zero), broken || breaks);
                 self.choose(j + 1, open, mode, counted, search);
-            } else if let Some(accel) = self.close(open, j, mode) {
+            } else if let Some(accel) = {
+                search.tries += 1;
+                self.close(open, j, mode)
+            } {
                 let next = Open {
                     bottom: j,
                     accel_below: accel,
@@ -669,6 +683,7 @@ pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
     }
     let zero = &zero_list[..k];
     let mut fallback: Option<(f64, Mode)> = None;
+    let mut tries = 0;
     for allow_breaking in [false, true] {
         for size in (0..=k).rev() {
             let mut best: Option<(u32, Mode)> = None;
@@ -698,6 +713,7 @@ pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
                         };
                     }
                     let v = violation(sys, &mode, req.zero, req.load0);
+                    tries += 1;
                     if v <= CONSISTENCY_TOL {
                         best = Some((kept, mode));
                         break;
@@ -708,10 +724,12 @@ pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
                 }
             }
             if let Some((_, mode)) = best {
+                let (count, count_tries) = consistent_count_and_tries(sys, req);
                 return Resolved {
                     mode,
                     consistent: true,
-                    ambiguous: consistent_count(sys, req) > 1,
+                    ambiguous: count > 1,
+                    tries: tries + count_tries,
                 };
             }
         }
@@ -720,6 +738,7 @@ pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
         mode: fallback.map_or(req.mode, |(_, m)| m),
         consistent: false,
         ambiguous: false,
+        tries,
     }
 }
 
@@ -728,6 +747,11 @@ pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
 /// the tests. Only mus > muk can make it exceed one, so the enumeration
 /// (3^k modes) is skipped otherwise.
 pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
+    consistent_count_and_tries(sys, req).0
+}
+
+/// [`consistent_count`] and the assignments it tried (its work).
+pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u32) {
     let mut list = [0usize; MAX_BODIES];
     let mut k = 0;
     for j in (1..=sys.n).filter(|&j| req.zero & (1 << j) != 0 && !sys.is_free(j)) {
@@ -736,10 +760,11 @@ pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
     }
     let zero = &list[..k];
     if zero.iter().all(|&j| sys.mus[j] == sys.muk[j]) {
-        return 1;
+        return (1, 0);
     }
     let mut count = 0;
-    for code in 0..3u32.pow(k as u32) {
+    let tries = 3u32.pow(k as u32);
+    for code in 0..tries {
         let mut mode = req.mode;
         let mut rest = code;
         for &j in zero {
@@ -751,7 +776,7 @@ pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
             count += 1;
         }
     }
-    count
+    (count, tries)
 }
 
 /// The `size`-element subsets of `k` items as bit masks, in increasing

@@ -19,6 +19,11 @@ use std::f64::consts::PI;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
+mod child;
+pub mod second;
+#[allow(unused_imports)]
+pub use child::in_child;
+
 /// `../shared/ground_motions/NAME` beside the repository.
 pub fn shared_record(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -548,12 +553,33 @@ impl Capture {
     pub fn last(&self) -> String {
         self.0.lock().unwrap().last().cloned().unwrap_or_default()
     }
+
+    /// Every message logged so far.
+    pub fn all(&self) -> Vec<String> {
+        self.0.lock().unwrap().clone()
+    }
 }
 
 /// A new FMU instance named `name` whose log the test can read.
 pub fn instance(name: &str) -> (Instance, Capture) {
     let log = Capture::default();
     (Instance::new(name, None, Box::new(log.clone()), false), log)
+}
+
+/// An instance initialized from `start` (no stop time) after `setup`;
+/// fails the test if initialization does.
+pub fn started(start: f64, setup: impl FnOnce(&mut Instance)) -> (Instance, Capture) {
+    let (mut inst, log) = instance("test");
+    assert_eq!(inst.setup_experiment(start, None), Status::Ok);
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    setup(&mut inst);
+    assert_eq!(
+        inst.exit_initialization_mode(),
+        Status::Ok,
+        "{}",
+        log.last()
+    );
+    (inst, log)
 }
 
 /// The benchmarks' stacks (`benches/frontier.rs`, `examples/scaling.rs`):

@@ -127,6 +127,58 @@ out["residual"] = (p["Einput"] - p["Ekinetic"] - p["Estrain"] - p["Eviscous"] - 
     assert abs(out["residual"]) < 1e-5, out
 
 
+def test_second_round_time_locations_and_work_through_fmpy(fmu, tmp_path):
+    # Issue 24 through the real FMU: a relative recordFile reads the FMU's
+    # resources folder only, an unusable location is an error through the
+    # logger with nothing on stderr; a point off the FMU's time is refused;
+    # a chattering stack under a 1 kHz square wave is stopped by the work
+    # bound within seconds, and the instance steps on.
+    square = tmp_path / "square.csv"
+    rows = []
+    for k in range(2 * 150_000):  # 150 s, each half period held, 1 us jumps
+        a = 5.0 if k % 2 == 0 else -5.0
+        rows += [f"{k * 5e-4:.9f},{a}", f"{k * 5e-4 + 5e-4 - 1e-6:.9f},{a}"]
+    square.write_text("\n".join(rows) + "\n")
+    (tmp_path / "default_record.csv").write_text("not a record\n")  # never read
+    code = CHILD_PRELUDE + f"""
+import time
+from ctypes import byref
+s = m.slave
+out["relative"] = attempt(lambda: m.start({{}}, 1.0, "default_record.csv"))
+s.freeInstance = lambda: None
+s.fmi2FreeInstance(s.component)
+s.component = s.fmi2Instantiate(b"hostile", 1, m.md.guid.encode(),
+                                "file:///x/resources%1\u00e9".encode(), byref(m.callbacks), 0, 0)
+m.fresh = True
+out["hostile"] = attempt(lambda: m.start({{}}, 1.0, "default_record.csv"))
+out["hostile_message"] = m.messages[-1] if m.messages else ""
+m.start({{}}, 10.0)
+out["off_point"] = attempt(lambda: s.doStep(-1e-12, 0.0))
+out["last"] = s.getRealStatus(2)
+m.start({{"nBlocks": 8, "Tp": 1e-3, **{{f"{{k}}[{{j}}]": 0.3 for k in ("mus", "muk")
+                                         for j in range(1, 9)}}}}, 150.0, {str(square)!r})
+started = time.perf_counter()
+out["chatter"] = attempt(lambda: s.doStep(0.0, 150.0))
+out["chatter_seconds"] = time.perf_counter() - started
+out["chatter_message"] = m.messages[-1] if m.messages else ""
+out["after"] = attempt(lambda: s.doStep(0.0, 0.5))
+print("RESULT" + json.dumps(out))
+"""
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                         preexec_fn=limit_memory, env=os.environ.copy(), cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stderr == "", run.stderr[-2000:]
+    out = json.loads([x for x in run.stdout.splitlines() if x.startswith("RESULT")][-1][6:])
+    assert out["relative"] == "ok", out
+    assert out["hostile"] == "error", out
+    assert "fmuResourceLocation" in out["hostile_message"], out
+    assert "hexadecimal" in out["hostile_message"], out
+    assert out["off_point"] == "error" and out["last"] == 0.0, out
+    assert out["chatter"] == "error" and "work bound" in out["chatter_message"], out
+    assert out["chatter_seconds"] < 30, out
+    assert out["after"] == "ok", out
+
+
 @pytest.fixture(scope="module")
 def fmu():
     sys.path.insert(0, str(ROOT / "scripts"))

@@ -38,7 +38,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
     _visible: fmi2Boolean,
     loggingOn: fmi2Boolean,
 ) -> fmi2Component {
-    let result = catch_unwind(|| {
+    let result = catch_quietly(|| {
         let name = string_arg(instanceName).unwrap_or_default();
         let sink: Box<dyn LogSink> = match functions.as_ref() {
             Some(f) => Box::new(CallbackSink {
@@ -75,14 +75,28 @@ pub unsafe extern "C" fn fmi2Instantiate(
             strings: vec![],
         })) as fmi2Component
     });
-    result.unwrap_or(std::ptr::null_mut())
+    result.unwrap_or_else(|text| {
+        // Through the importer's logger, never on its stderr.
+        let _ = catch_quietly(|| {
+            if let Some(f) = functions.as_ref() {
+                let sink = CallbackSink {
+                    logger: f.logger,
+                    env: f.componentEnvironment,
+                    name: c_text(&string_arg(instanceName).unwrap_or_default()),
+                };
+                let message = format!("fmi2Instantiate: internal error: {text}");
+                sink.log(Status::Fatal, "logStatusFatal", &message);
+            }
+        });
+        std::ptr::null_mut()
+    })
 }
 
 /// Frees an instance (NULL is ignored).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     if !c.is_null() {
-        let _ = catch_unwind(|| drop(Box::from_raw(c as *mut Component)));
+        let _ = catch_quietly(|| drop(Box::from_raw(c as *mut Component)));
     }
 }
 

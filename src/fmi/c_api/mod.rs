@@ -6,8 +6,10 @@
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
 use crate::fmi::instance::{Instance, LogSink, NullSink, SavedState, Status};
+use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::Once;
 
 /// An instance, as the importer holds it.
 pub type fmi2Component = *mut c_void;
@@ -117,6 +119,43 @@ fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
         .unwrap_or_else(|| "unknown panic".into())
 }
 
+thread_local! {
+    /// Inside [`catch_quietly`] on this thread.
+    static QUIET: Cell<bool> = const { Cell::new(false) };
+    /// The message of the last panic caught quietly on this thread.
+    static CAUGHT: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// Runs `f`, turning a panic into its message (with where it happened)
+/// without printing anything: the default panic hook writes to the host's
+/// stderr, so a hook installed once passes a panic inside this boundary to
+/// the caller (for the logger) and any other to the previous hook.
+pub fn catch_quietly<R>(f: impl FnOnce() -> R) -> Result<R, String> {
+    static HOOK: Once = Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if QUIET.with(Cell::get) {
+                let place = info
+                    .location()
+                    .map_or(String::new(), |l| format!(" at {}:{}", l.file(), l.line()));
+                let text = format!("{}{place}", panic_text(info.payload()));
+                CAUGHT.with(|c| *c.borrow_mut() = Some(text));
+            } else {
+                previous(info)
+            }
+        }));
+    });
+    let outer = QUIET.with(|q| q.replace(true));
+    let result = catch_unwind(AssertUnwindSafe(f));
+    QUIET.with(|q| q.set(outer));
+    result.map_err(|p| {
+        CAUGHT
+            .with(|c| c.borrow_mut().take())
+            .unwrap_or_else(|| panic_text(&*p))
+    })
+}
+
 /// Runs `f` on the component behind `c` inside a panic boundary.
 unsafe fn with(
     c: fmi2Component,
@@ -127,12 +166,13 @@ unsafe fn with(
         return ERROR;
     }
     let comp = &mut *(c as *mut Component);
-    match catch_unwind(AssertUnwindSafe(|| f(&mut *comp))) {
+    match catch_quietly(|| f(&mut *comp)) {
         Ok(status) => status as fmi2Status,
-        Err(p) => comp
-            .instance
-            .fatal(func, &format!("internal error: {}", panic_text(&*p)))
-            as fmi2Status,
+        Err(text) => catch_quietly(|| {
+            comp.instance
+                .fatal(func, &format!("internal error: {text}"))
+        })
+        .unwrap_or(Status::Fatal) as fmi2Status,
     }
 }
 

@@ -9,31 +9,42 @@ use crate::physics::params::Params;
 use crate::physics::snapshot::{ByteReader, ByteWriter};
 
 const STATE_MAGIC: &[u8; 8] = b"SLLSTATE";
-const STATE_VERSION: u32 = 3;
-use crate::limits::MAX_PATH_BYTES;
+/// 4: the count of steps (the time tolerance), and every field checked.
+const STATE_VERSION: u32 = 4;
+use crate::limits::{self, Num, MAX_PATH_BYTES, MAX_TIME};
 use crate::physics::params::{check_scalar, MAX_BLOCKS};
 use crate::physics::snapshot::SnapshotError;
 use crate::physics::solver::{Solver, SolverKind, Stepper};
 
 /// Every field of a deserialized state, beyond what the engine checks of its
-/// own: times, parameters in range, a solver that is the one its parameters
-/// build, finite inputs and outputs (docs/robustness.md, "Saved states").
+/// own: times, parameters (of every block, present or not) and inputs with
+/// their slopes in the ranges `fmi2SetReal` allows, a solver that is the one
+/// its parameters build, its clock the FMU's, finite outputs
+/// (docs/robustness.md, "Saved states").
 pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
     if d.phase == Phase::Error {
         return Err("a saved state is never in the Error state".into());
     }
+    let in_range = |t: f64| t.abs() <= MAX_TIME;
     let stop_ok = d
         .stop_time
-        .is_none_or(|stop| stop.is_finite() && stop >= d.start_time);
-    let tol = 1e-9 * d.time.abs().max(1.0);
-    let time_ok = d.start_time.is_finite()
+        .is_none_or(|stop| in_range(stop) && stop >= d.start_time);
+    // (The time may pass MAX_TIME by stepping, as far as the work bound goes.)
+    let time_ok = in_range(d.start_time)
         && d.time.is_finite()
         && d.time >= d.start_time
-        && d.stop_time.is_none_or(|stop| d.time <= stop + tol);
-    if !(stop_ok && time_ok) {
+        && d.stop_time
+            .is_none_or(|stop| limits::within_stop(d.time, stop));
+    let switch_ok = d.t_switch >= d.start_time && d.t_switch <= d.time;
+    if !(stop_ok && time_ok && switch_ok) {
         return Err(format!(
-            "times of the saved state are not consistent: startTime {}, stopTime {:?}, time {}",
-            d.start_time, d.stop_time, d.time
+            "times of the saved state are not consistent: startTime {}, stopTime {}, time {}, \
+             tSwitch {} (start <= tSwitch <= time <= stop, start and stop within {} s)",
+            Num(d.start_time),
+            d.stop_time.map_or("none".into(), |s| Num(s).to_string()),
+            Num(d.time),
+            Num(d.t_switch),
+            Num(MAX_TIME)
         ));
     }
     let v = &d.values;
@@ -43,39 +54,41 @@ pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
     if SolverKind::from_code(v.solver).is_none() {
         return Err(format!("solver {} of the saved state is unknown", v.solver));
     }
-    for (name, x) in [
+    let p = &v.params;
+    if p.n_blocks > MAX_BLOCKS {
+        return Err(format!(
+            "nBlocks {} of the saved state is above 8",
+            p.n_blocks
+        ));
+    }
+    // The ranges of fmi2SetReal, for every value it could have set.
+    let scalars = [
+        ("mp", p.mp),
+        ("Tp", p.tp),
+        ("zeta", p.zeta),
+        ("g", p.g),
         ("recordScale", v.record_scale),
         ("maxStep", v.max_step),
         ("frictionEps", v.friction_eps),
-    ] {
-        check_scalar(name, x).map_err(|e| format!("saved parameter {e}"))?;
-    }
-    if ![d.ag, d.fext, d.der_ag, d.der_fext]
-        .iter()
-        .all(|x| x.is_finite())
-    {
-        return Err("a saved input is not finite".into());
+        ("ag", d.ag),
+        ("Fext", d.fext),
+        ("der(ag)", d.der_ag),
+        ("der(Fext)", d.der_fext),
+    ];
+    let blocks =
+        (0..MAX_BLOCKS).flat_map(|j| [("alpha", p.alpha[j]), ("mus", p.mus[j]), ("muk", p.muk[j])]);
+    for (name, x) in scalars.into_iter().chain(blocks) {
+        check_scalar(name, x).map_err(|e| format!("saved value {e}"))?;
     }
     let Some(sim) = &d.sim else {
         if d.phase == Phase::StepComplete {
             return Err("a saved state ready to step has no simulator".into());
         }
-        // Before initialization each value was checked as it was set; the
-        // cross-field rules wait for fmi2ExitInitializationMode.
-        let p = &v.params;
-        if p.n_blocks > MAX_BLOCKS {
-            return Err(format!(
-                "nBlocks {} of the saved state is above 8",
-                p.n_blocks
-            ));
+        // Before initialization the simulator's clock has not started.
+        if d.time != d.start_time || d.steps != 0 {
+            return Err("a saved state before initialization has moved its time".into());
         }
-        let scalars = [("mp", p.mp), ("Tp", p.tp), ("zeta", p.zeta), ("g", p.g)];
-        for (name, x) in scalars.into_iter().chain(
-            (0..MAX_BLOCKS)
-                .flat_map(|j| [("alpha", p.alpha[j]), ("mus", p.mus[j]), ("muk", p.muk[j])]),
-        ) {
-            check_scalar(name, x).map_err(|e| format!("saved parameter {e}"))?;
-        }
+        // The cross-field rules wait for fmi2ExitInitializationMode.
         return Ok(());
     };
     let fresh = v.build().map_err(|e| format!("saved parameter {e}"))?;
@@ -89,11 +102,16 @@ pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
     if !same_solver {
         return Err("the saved simulator is not the one its saved parameters build".into());
     }
-    if (d.start_time + sim.time() - d.time).abs() > tol {
+    // The force the engine holds is an input too.
+    check_scalar("Fext", sim.fext_now()).map_err(|e| format!("saved simulator's {e}"))?;
+    // The FMU's time is the start plus the simulator's own, as every step
+    // leaves it.
+    if (d.start_time + sim.time()).to_bits() != d.time.to_bits() {
         return Err(format!(
-            "the saved simulator's time {} does not match the saved time {}",
-            sim.time(),
-            d.time - d.start_time
+            "the saved simulator's time {} does not match the saved time {} - {}",
+            Num(sim.time()),
+            Num(d.time),
+            Num(d.start_time)
         ));
     }
     if let Some(message) = crate::limits::non_finite_message(&sim.outputs(), d.start_time) {
@@ -150,7 +168,9 @@ impl Instance {
         w.buf.extend_from_slice(STATE_MAGIC);
         w.u32(STATE_VERSION);
         w.u8(d.phase as u8);
-        w.f64s(&[d.start_time, d.stop_time.unwrap_or(f64::NAN), d.time]);
+        w.f64s(&[d.start_time, d.stop_time.unwrap_or(0.0), d.time]);
+        w.u8(u8::from(d.stop_time.is_some()));
+        w.u64(d.steps);
         w.f64(d.t_switch);
         let v = &d.values;
         w.str(&v.record_file);
@@ -194,6 +214,12 @@ impl Instance {
             x => return Err(format!("unknown phase {x}")),
         };
         let (start_time, stop, time) = (r.f64()?, r.f64()?, r.f64()?);
+        let stop_time = match r.u8()? {
+            0 => None,
+            1 => Some(stop),
+            x => return Err(format!("unknown stop-time flag {x}")),
+        };
+        let steps = r.u64()?;
         let t_switch = r.f64()?;
         let mut values = ParameterValues {
             record_file: r.str()?,
@@ -221,8 +247,9 @@ impl Instance {
         let d = Dynamic {
             phase,
             start_time,
-            stop_time: (!stop.is_nan()).then_some(stop),
+            stop_time,
             time,
+            steps,
             t_switch,
             values,
             ag,

@@ -9,7 +9,7 @@ use crate::fmi::ports;
 use crate::fmi::variables::{Causality, Id};
 use crate::ground::record;
 use crate::limits::{self, Num};
-use crate::physics::engine::{Excitation, Outputs};
+use crate::physics::engine::{Excitation, Outputs, SimError};
 use crate::physics::params::check_scalar;
 use crate::physics::solver::{Solver, Stepper};
 
@@ -110,7 +110,7 @@ impl Instance {
             let of_order = &derivatives[order as usize - 1];
             *slot = real_output(of_order, id).expect("every continuous Real output has a field");
         }
-        Status::Ok
+        self.all_finite(F, vrs, out, "derivative of ")
     }
 
     /// `fmi2SetRealInputDerivatives`, order 1: the slope of an input over the
@@ -127,11 +127,15 @@ impl Instance {
         ) {
             return s;
         }
+        // Every entry checked before any is set (all or nothing).
         for ((&vr, &order), &x) in vrs.iter().zip(orders).zip(values) {
             let id = match self.lookup(F, vr) {
                 Ok(id) => id,
                 Err(s) => return s,
             };
+            if !matches!(id, Id::Ag | Id::Fext) {
+                return self.error(F, format!("{} is not a Real input", name_of(id)));
+            }
             if order != 1 {
                 return self.error(
                     F,
@@ -144,29 +148,38 @@ impl Instance {
             if let Err(e) = check_scalar(&format!("der({})", name_of(id)), x) {
                 return self.param_error(F, e);
             }
-            match id {
-                Id::Ag => self.d.der_ag = x,
-                Id::Fext => self.d.der_fext = x,
-                _ => return self.error(F, format!("{} is not a Real input", name_of(id))),
+        }
+        for (&vr, &x) in vrs.iter().zip(values) {
+            match Id::from_vr(vr) {
+                Some(Id::Ag) => self.d.der_ag = x,
+                _ => self.d.der_fext = x,
             }
         }
         Status::Ok
     }
 
-    /// fmi2DoStep.
+    /// fmi2DoStep. The FMU's time is its own: the step goes from it by
+    /// exactly `h` (the master's `t` must match it up to rounding, see
+    /// [`limits::time_tolerance`]), so the results depend on the step sizes
+    /// only, a step of size 0 never moves time, and a master's rounding
+    /// never accumulates in the FMU's clock.
     pub fn do_step(&mut self, t: f64, h: f64) -> Status {
         const F: &str = "fmi2DoStep";
         if let Err(s) = self.require(F, &[Phase::StepComplete]) {
             return s;
         }
-        let now = self.d.time;
-        if !t.is_finite() || (t - now).abs() > 1e-9 * now.abs().max(1.0) {
+        let (now, start) = (self.d.time, self.d.start_time);
+        let tol = limits::time_tolerance(now, start, self.d.steps);
+        if !(t.is_finite() && (t - now).abs() <= tol) {
             return self.error(
                 F,
                 format!(
-                    "currentCommunicationPoint = {} does not match the FMU's time {}",
+                    "currentCommunicationPoint = {} does not match the FMU's time {} \
+                     (they may differ by rounding only: at most {} s here); step from the \
+                     time the last step ended (fmi2LastSuccessfulTime)",
                     Num(t),
-                    Num(now)
+                    Num(now),
+                    Num(tol)
                 ),
             );
         }
@@ -179,25 +192,51 @@ impl Instance {
                 ),
             );
         }
-        if h > 0.0 && t + h == t {
+        let sim_time = self.d.sim.as_ref().expect("built at initialization").time();
+        let sim_end = sim_time + h;
+        let end = if h == 0.0 { now } else { start + sim_end };
+        if h > 0.0 && end <= now {
             return self.error(
                 F,
                 format!(
                     "communicationStepSize = {} is below the resolution of time at t = {} s: \
                      it would not advance",
                     Num(h),
-                    Num(t)
+                    Num(now)
                 ),
             );
         }
         if let Some(stop) = self.d.stop_time {
-            if t + h > stop + 1e-9 * stop.abs().max(1.0) {
+            if !limits::within_stop(end, stop) {
                 return self.error(
                     F,
                     format!(
                         "stepping to {} would pass stopTime = {}",
-                        Num(t + h),
+                        Num(end),
                         Num(stop)
+                    ),
+                );
+            }
+        }
+        // The inputs' slopes keep them in their ranges over the step.
+        let ag_end = self.d.ag + self.d.der_ag * h;
+        let fext_end = self.d.fext + self.d.der_fext * h;
+        for (name, x0, slope, x1) in [
+            ("ag", self.d.ag, self.d.der_ag, ag_end),
+            ("Fext", self.d.fext, self.d.der_fext, fext_end),
+        ] {
+            if let Err(e) = check_scalar(name, x1) {
+                return self.error(
+                    F,
+                    format!(
+                        "der({name}) = {} takes {name} from {} to {} over communicationStepSize \
+                         = {} s, outside its range: {name} must stay {}; shorten the step or \
+                         lower the slope",
+                        Num(slope),
+                        Num(x0),
+                        Num(x1),
+                        Num(h),
+                        e.allowed
                     ),
                 );
             }
@@ -210,19 +249,20 @@ impl Instance {
         };
         let at_start = self.next_excitation();
         let sim = self.d.sim.as_mut().expect("built at initialization");
-        let t_end = (t + h - self.d.start_time).max(sim.time());
         // Bounded work: refuse up front what would run for minutes or more.
         let samples = self
             .record
             .as_ref()
-            .map_or(0, |(_, gm)| gm.samples_in(sim.time(), t_end));
-        if let Some(message) = limits::work_error(
-            t_end - sim.time(),
-            sim.max_internal_step(),
-            samples,
-            sim.step_weight(),
-        ) {
+            .map_or(0, |(_, gm)| gm.samples_in(sim_time, sim_end));
+        let weight = sim.step_weight();
+        if let Some(message) = limits::work_error(h, sim.max_internal_step(), samples, weight) {
             return self.error(F, message);
+        }
+        // What switches spend, counted as they happen: a call that spends
+        // the budget is stopped and undone (the state before it is kept).
+        let before = sim.clone();
+        if let Solver::Exact(s) = sim {
+            s.set_work_budget((limits::MAX_STEPS_PER_CALL / weight) as u64);
         }
         // A jump of an input acts at the communication point, where the
         // outputs already showed it: tSwitch watches for switches after it.
@@ -234,32 +274,60 @@ impl Instance {
         let result = jump.and_then(|()| {
             sim.watch_switches();
             match &self.record {
-                Some((_, gm)) => {
-                    record::advance_with_record(sim, t_end, gm, self.d.values.record_scale, &extra)
-                }
-                None => sim.advance(t_end, &extra),
+                Some((_, gm)) => record::advance_with_record(
+                    sim,
+                    sim_end,
+                    gm,
+                    self.d.values.record_scale,
+                    &extra,
+                ),
+                None => sim.advance(sim_end, &extra),
             }
         });
         self.outputs = None;
+        if let Err(SimError::WorkLimit { t: stopped }) = result {
+            *sim = before;
+            return self.error(
+                F,
+                format!(
+                    "the stick/slip switches spent the work bound of one call ({:e} internal \
+                     steps' worth, a few seconds) at t = {} s, before the step's end at {} s: \
+                     the step was not taken (the FMU stays at t = {} s, as before the call); \
+                     split it into shorter communication steps",
+                    limits::MAX_STEPS_PER_CALL,
+                    Num(start + stopped),
+                    Num(end),
+                    Num(now)
+                ),
+            );
+        }
         let first_switch = sim.first_switch();
-        let fext_end = sim.fext_now();
+        // Fext exactly as the engine ended the step (the next step sees no
+        // jump), which differs from `fext_end` by rounding only.
+        let fext_engine = sim.fext_now();
         // Never fmi2OK with a NaN or an infinity in an output.
-        let bad = limits::non_finite_message(&sim.outputs(), self.d.start_time);
+        let bad = limits::non_finite_message(&sim.outputs(), start);
         match (result, bad) {
             (Ok(()), None) => {
                 // The inputs stand where their slopes took them: the outputs
-                // at t + h see them there, and an input left alone is held at
-                // that value (Fext exactly as the engine ended the step, so
-                // the next step sees no jump).
-                self.d.ag += self.d.der_ag * h;
-                self.d.fext = fext_end;
+                // at the step's end see them there, and an input left alone
+                // is held at that value.
+                self.d.ag = ag_end;
+                self.d.fext = if check_scalar("Fext", fext_engine).is_ok() {
+                    fext_engine
+                } else {
+                    fext_end
+                };
                 self.d.der_ag = 0.0;
                 self.d.der_fext = 0.0;
-                self.d.time = t + h;
+                self.d.time = end;
+                if h > 0.0 {
+                    self.d.steps += 1;
+                }
                 self.d.t_switch = if first_switch.is_nan() {
-                    t + h
+                    end
                 } else {
-                    (first_switch + self.d.start_time).min(t + h)
+                    (first_switch + start).clamp(now, end)
                 };
                 Status::Ok
             }

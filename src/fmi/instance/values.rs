@@ -5,7 +5,7 @@
 
 use super::{Instance, Phase, Status};
 use crate::fmi::variables::{Causality, Id};
-use crate::limits::MAX_PATH_BYTES;
+use crate::limits::{Num, MAX_PATH_BYTES};
 use crate::physics::engine::Outputs;
 use crate::physics::params::{check_scalar, ParamError, MAX_BLOCKS};
 use crate::physics::solver::SolverKind;
@@ -54,7 +54,37 @@ impl Instance {
         self.error(func, e.to_string())
     }
 
-    /// fmi2SetReal.
+    /// The slot of a settable Real variable.
+    fn real_slot(&mut self, id: Id) -> Option<&mut f64> {
+        let v = &mut self.d.values;
+        Some(match id {
+            Id::Mp => &mut v.params.mp,
+            Id::Tp => &mut v.params.tp,
+            Id::Zeta => &mut v.params.zeta,
+            Id::G => &mut v.params.g,
+            Id::RecordScale => &mut v.record_scale,
+            Id::MaxStep => &mut v.max_step,
+            Id::FrictionEps => &mut v.friction_eps,
+            Id::Alpha(j) => &mut v.params.alpha[j - 1],
+            Id::Mus(j) => &mut v.params.mus[j - 1],
+            Id::Muk(j) => &mut v.params.muk[j - 1],
+            Id::Ag => &mut self.d.ag,
+            Id::Fext => &mut self.d.fext,
+            _ => return None,
+        })
+    }
+
+    /// After variable `id` was set: outputs show the inputs set for the
+    /// next step (a master may iterate); a parameter rebuilds the simulator.
+    fn changed(&mut self, id: Id) {
+        self.outputs = None;
+        if id.causality() == Causality::Parameter {
+            self.d.sim = None;
+        }
+    }
+
+    /// fmi2SetReal: every value checked before any is set (a call with one
+    /// bad entry changes nothing).
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         const F: &str = "fmi2SetReal";
         for (&vr, &x) in vrs.iter().zip(values) {
@@ -62,35 +92,22 @@ impl Instance {
                 Ok(id) => id,
                 Err(s) => return s,
             };
+            if self.real_slot(id).is_none() {
+                return self.error(F, format!("{} is not a Real", name_of(id)));
+            }
             if let Err(e) = check_scalar(&name_of(id), x) {
                 return self.param_error(F, e);
             }
-            let v = &mut self.d.values;
-            match id {
-                Id::Mp => v.params.mp = x,
-                Id::Tp => v.params.tp = x,
-                Id::Zeta => v.params.zeta = x,
-                Id::G => v.params.g = x,
-                Id::RecordScale => v.record_scale = x,
-                Id::MaxStep => v.max_step = x,
-                Id::FrictionEps => v.friction_eps = x,
-                Id::Alpha(j) => v.params.alpha[j - 1] = x,
-                Id::Mus(j) => v.params.mus[j - 1] = x,
-                Id::Muk(j) => v.params.muk[j - 1] = x,
-                Id::Ag => self.d.ag = x,
-                Id::Fext => self.d.fext = x,
-                _ => return self.error(F, format!("{} is not a Real", name_of(id))),
-            }
-            // Outputs show the inputs set for the next step (a master may iterate).
-            self.outputs = None;
-            if id.causality() == Causality::Parameter {
-                self.d.sim = None;
-            }
+        }
+        for (&vr, &x) in vrs.iter().zip(values) {
+            let id = Id::from_vr(vr).expect("checked above");
+            *self.real_slot(id).expect("checked above") = x;
+            self.changed(id);
         }
         Status::Ok
     }
 
-    /// fmi2SetInteger.
+    /// fmi2SetInteger: all values checked first, as fmi2SetReal.
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
         const F: &str = "fmi2SetInteger";
         for (&vr, &x) in vrs.iter().zip(values) {
@@ -98,21 +115,29 @@ impl Instance {
                 Ok(id) => id,
                 Err(s) => return s,
             };
-            match id {
-                Id::NBlocks if (0..=MAX_BLOCKS as i32).contains(&x) => {
-                    self.d.values.params.n_blocks = x as usize
-                }
-                Id::NBlocks => return self.error(F, format!("nBlocks = {x} is not allowed: it must be an integer from 0 to {MAX_BLOCKS}")),
-                Id::Solver if SolverKind::from_code(x).is_some() => self.d.values.solver = x,
-                Id::Solver => return self.error(F, format!("solver = {x} is not allowed: it must be 1 (event-located RK4), 2 (step-end switching) or 3 (tanh-regularized friction)")),
-                _ => return self.error(F, format!("{} is not an Integer", name_of(id))),
+            let problem = match id {
+                Id::NBlocks if (0..=MAX_BLOCKS as i32).contains(&x) => None,
+                Id::NBlocks => Some(format!("nBlocks = {x} is not allowed: it must be an integer from 0 to {MAX_BLOCKS}")),
+                Id::Solver if SolverKind::from_code(x).is_some() => None,
+                Id::Solver => Some(format!("solver = {x} is not allowed: it must be 1 (event-located RK4), 2 (step-end switching) or 3 (tanh-regularized friction)")),
+                _ => Some(format!("{} is not an Integer", name_of(id))),
+            };
+            if let Some(message) = problem {
+                return self.error(F, message);
             }
-            self.d.sim = None;
+        }
+        for (&vr, &x) in vrs.iter().zip(values) {
+            let id = Id::from_vr(vr).expect("checked above");
+            match id {
+                Id::NBlocks => self.d.values.params.n_blocks = x as usize,
+                _ => self.d.values.solver = x,
+            }
+            self.changed(id);
         }
         Status::Ok
     }
 
-    /// fmi2SetBoolean (nothing is settable).
+    /// fmi2SetBoolean (nothing is settable: any reference is an error).
     pub fn set_boolean(&mut self, vrs: &[u32], _values: &[i32]) -> Status {
         const F: &str = "fmi2SetBoolean";
         // The first reference decides: it is unknown, not settable now, or
@@ -124,7 +149,7 @@ impl Instance {
         }
     }
 
-    /// fmi2SetString.
+    /// fmi2SetString: all values checked first, as fmi2SetReal.
     pub fn set_string(&mut self, vrs: &[u32], values: &[String]) -> Status {
         const F: &str = "fmi2SetString";
         for (&vr, x) in vrs.iter().zip(values) {
@@ -132,20 +157,22 @@ impl Instance {
                 Ok(id) => id,
                 Err(s) => return s,
             };
-            match id {
-                Id::RecordFile if x.len() > MAX_PATH_BYTES => {
-                    return self.error(
-                        F,
-                        format!(
-                            "recordFile of {} bytes is not allowed: it must be a path of at most {MAX_PATH_BYTES} bytes",
-                            x.len()
-                        ),
-                    )
-                }
-                Id::RecordFile => self.d.values.record_file = x.clone(),
-                _ => return self.error(F, format!("{} is not a String", name_of(id))),
+            let problem = match id {
+                Id::RecordFile if x.len() > MAX_PATH_BYTES => Some(format!(
+                    "recordFile of {} bytes is not allowed: it must be a path of at most {MAX_PATH_BYTES} bytes",
+                    x.len()
+                )),
+                Id::RecordFile => None,
+                _ => Some(format!("{} is not a String", name_of(id))),
+            };
+            if let Some(message) = problem {
+                return self.error(F, message);
             }
-            self.d.sim = None;
+        }
+        for (&vr, x) in vrs.iter().zip(values) {
+            let id = Id::from_vr(vr).expect("checked above");
+            self.d.values.record_file = x.clone();
+            self.changed(id);
         }
         Status::Ok
     }
@@ -202,7 +229,35 @@ impl Instance {
                 }
             };
         }
-        Status::Ok
+        self.all_finite(F, vrs, out, "")
+    }
+
+    /// The one check every Real getter ends with: fmi2OK only if every value
+    /// it wrote is finite; otherwise fmi2Error naming the first other one.
+    /// (`what`: "" for values, "derivative of " for derivatives.)
+    pub(super) fn all_finite(
+        &mut self,
+        func: &str,
+        vrs: &[u32],
+        out: &[f64],
+        what: &str,
+    ) -> Status {
+        match vrs.iter().zip(out).find(|(_, x)| !x.is_finite()) {
+            None => Status::Ok,
+            Some((&vr, &x)) => {
+                let name = Id::from_vr(vr).map_or(vr.to_string(), name_of);
+                let time = self.d.time;
+                self.error(
+                    func,
+                    format!(
+                        "the {what}{name} = {} at t = {} s is not finite (the state left the \
+                         finite numbers: inputs or parameters too large for this scene)",
+                        Num(x),
+                        Num(time)
+                    ),
+                )
+            }
+        }
     }
 
     /// fmi2GetInteger.

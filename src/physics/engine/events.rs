@@ -99,6 +99,7 @@ impl Simulator {
             load0: self.load0(),
         };
         let res = mode::resolve(&self.sys, &req);
+        self.tries += u64::from(res.tries);
         if !res.consistent {
             self.stats.inconsistent += 1;
         }

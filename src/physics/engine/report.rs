@@ -26,6 +26,11 @@ pub enum SimError {
         /// When it happened.
         t: f64,
     },
+    /// The call's work budget ([`Simulator::set_work_budget`]) is spent.
+    WorkLimit {
+        /// The simulator's time when it stopped (a substep's end).
+        t: f64,
+    },
 }
 
 impl std::fmt::Display for SimError {
@@ -47,6 +52,13 @@ impl std::fmt::Display for SimError {
             SimError::NonFinite { t } => {
                 write!(f, "the state became non-finite at t = {} s", Num(*t))
             }
+            SimError::WorkLimit { t } => write!(
+                f,
+                "stopped at t = {} s: the stick/slip switches spent the work bound of one call \
+                 ({:e} internal steps' worth)",
+                Num(*t),
+                crate::limits::MAX_STEPS_PER_CALL
+            ),
         }
     }
 }
