@@ -11,7 +11,6 @@
 mod common;
 use common::*;
 use stacked_live_load::*;
-use std::f64::consts::PI;
 
 /// A random stack of `n` blocks: masses, friction falling upwards on
 /// average so that every interface gets to slip, μs = μk or μs > μk.
