@@ -154,29 +154,16 @@ struct RecordPieces<'a> {
     done: bool,
 }
 
-impl Iterator for RecordPieces<'_> {
-    type Item = (f64, Excitation);
-
+impl RecordPieces<'_> {
+    /// The piece from `self.t` given its value, slope and end, and the
+    /// iterator moved past it.
     #[inline(always)]
-    fn next(&mut self) -> Option<(f64, Excitation)> {
-        if self.done {
-            return None;
-        }
-        let (time, accel, i) = (&self.record.time, &self.record.accel, self.next_sample);
-        let (a, slope, piece_end) = if i >= 1 && i < time.len() && time[i - 1] == self.t {
-            // A whole sample interval from its first sample (the usual case).
-            let (t0, t1) = (time[i - 1], time[i]);
-            let rise = accel[i] - accel[i - 1];
-            let slope = if ((t1 - t0) - self.dt).abs() <= 1e-15 * (t1.abs() + self.dt) {
-                rise * self.inv_dt
-            } else {
-                rise / (t1 - t0)
-            };
-            (accel[i - 1], slope, t1)
+    fn piece(&mut self, a: f64, slope: f64, piece_end: f64, i: usize) -> (f64, Excitation) {
+        let t1 = if piece_end < self.t_end {
+            piece_end
         } else {
-            self.record.piece_before(i, self.t)
+            self.t_end
         };
-        let t1 = piece_end.min(self.t_end);
         let (e, dt) = (&self.extra, self.t - self.t_start);
         let exc = Excitation {
             ag: self.scale * a + e.ag + e.ag_rate * dt,
@@ -186,10 +173,51 @@ impl Iterator for RecordPieces<'_> {
         };
         self.t = t1;
         self.done = t1 >= self.t_end;
-        if i < time.len() && time[i] <= t1 {
+        if piece_end <= t1 {
             self.next_sample = i + 1;
         }
-        Some((t1, exc))
+        (t1, exc)
+    }
+
+    /// A partial interval, or one before the first or after the last sample.
+    #[cold]
+    #[inline(never)]
+    fn partial(&mut self) -> (f64, Excitation) {
+        let i = self.next_sample;
+        let (a, slope, piece_end) = self.record.piece_before(i, self.t);
+        let (t1, exc) = self.piece(a, slope, piece_end, i);
+        if i >= self.record.time.len() {
+            self.next_sample = i;
+        }
+        (t1, exc)
+    }
+}
+
+impl Iterator for RecordPieces<'_> {
+    type Item = (f64, Excitation);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(f64, Excitation)> {
+        if self.done {
+            return None;
+        }
+        let (time, accel, i) = (
+            &self.record.time[..],
+            &self.record.accel[..],
+            self.next_sample,
+        );
+        if i == 0 || i >= time.len() || i >= accel.len() || time[i - 1] != self.t {
+            return Some(self.partial());
+        }
+        // A whole sample interval from its first sample (the usual case).
+        let (t0, t1) = (time[i - 1], time[i]);
+        let rise = accel[i] - accel[i - 1];
+        let slope = if ((t1 - t0) - self.dt).abs() <= 1e-15 * (t1.abs() + self.dt) {
+            rise * self.inv_dt
+        } else {
+            rise / (t1 - t0)
+        };
+        Some(self.piece(accel[i - 1], slope, t1, i))
     }
 }
 
