@@ -86,10 +86,39 @@ impl WorkSums {
         with_p - load_accel * with_1 + with_rate
     }
 
-    /// Adds the sums' work on `map` to `[input, viscous]` and starts anew.
-    fn flush(&mut self, map: &ExactMap, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
+    /// Adds the sums' work to `[input, viscous]` and starts anew: on
+    /// `map`, and over the rest `delta` of each substep to first order (the
+    /// integrands at the map's end times `delta`: `m (p - L) v` and `c v²`,
+    /// with `v = V z` and `p = z_2 + h z_3` at the end).
+    fn flush(
+        &mut self,
+        map: &ExactMap,
+        delta: f64,
+        mass: f64,
+        load_accel: f64,
+        work: &mut [f64; 2],
+    ) {
         work[0] += mass * self.input(map, load_accel);
         work[1] += map.c * self.int_v2(map);
+        if delta != 0.0 {
+            let (s, l, v) = (&self.products, &self.linear, &map.v);
+            // Rows of the packed products: S_2j and S_3j.
+            let row2 = [s[5], s[7], s[2], s[9]];
+            let row3 = [s[6], s[8], s[9], s[3]];
+            let p_v: f64 = (0..4).map(|j| v[j] * (row2[j] + map.h * row3[j])).sum();
+            let sum_v = dot(v, l);
+            let diagonal = [s[0], s[1], s[2], s[3]];
+            let square: f64 = (0..4).map(|i| v[i] * v[i] * diagonal[i]).sum::<f64>()
+                + 2.0
+                    * (v[0] * v[1] * s[4]
+                        + v[0] * v[2] * s[5]
+                        + v[0] * v[3] * s[6]
+                        + v[1] * v[2] * s[7]
+                        + v[1] * v[3] * s[8]
+                        + v[2] * v[3] * s[9]);
+            work[0] += delta * mass * (p_v - load_accel * sum_v);
+            work[1] += delta * map.c * square;
+        }
         *self = WorkSums::default();
     }
 }
@@ -193,7 +222,7 @@ impl Simulator {
         let mut peak_slip: [f64; NC] = std::array::from_fn(|m| self.peak_slip[iface[m]]);
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let mut sums = WorkSums::default();
-        // Work of maps already left, and of the rounding of substep lengths.
+        // Work of the substeps already summed and flushed.
         let mut work = [0.0; 2];
         let mut t0 = self.t;
         let mut inp = Inputs::at(&cur, t0);
@@ -216,9 +245,9 @@ impl Simulator {
                     (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
                 } else {
                     cur = Piece::new(t0, t_end, &exc, h_max);
+                    sums.flush(map, rows.delta, mass, load_accel, &mut work);
                     let hc = canonical_length(cur.h);
                     if hc != map.h {
-                        sums.flush(map, mass, load_accel, &mut work);
                         let i = maps.index(sys, mass, hc);
                         map = maps.get(i);
                         (w2, cm) = (map.w2, map.cm);
@@ -247,15 +276,6 @@ impl Simulator {
                 fext_rate_m - inp.ag_rate,
             ];
             let (u1, v1) = (dot(&rows.u, &z), dot(&rows.v, &z));
-            let rounding = if rows.delta != 0.0 {
-                let p_nominal = z[2] + z[3] * map.h;
-                [
-                    rows.delta * mass * (p_nominal - load_accel) * v1,
-                    rows.delta * map.c * v1 * v1,
-                ]
-            } else {
-                [0.0; 2]
-            };
             let (ag1, fext1) = (inp.ag + inp.ag_rate * hs, inp.fext + inp.fext_rate * hs);
             let a1 = load_accel + fext1 * inv_mass - w2 * u1 - cm * v1;
             let s3 = map.sup_v(3, &z);
@@ -346,8 +366,6 @@ impl Simulator {
             }
             // Taken.
             sums.add(&z);
-            work[0] += rounding[0];
-            work[1] += rounding[1];
             slip = new_slip;
             for c in 1..NC {
                 shift[c] += du[c];
@@ -361,7 +379,7 @@ impl Simulator {
 
         *piece = cur;
         if taken > 0 {
-            sums.flush(map, mass, load_accel, &mut work);
+            sums.flush(map, rows.delta, mass, load_accel, &mut work);
             // Input work on the upper clusters over the run, exact: with
             // v_c' = A_c - ag, -m ag v_c = d(m v_c²/2)/dt - m A_c v_c.
             let mut upper = 0.0;
@@ -418,4 +436,32 @@ impl Rows {
 fn acceleration_row(map: &ExactMap) -> [f64; 4] {
     let p = [0.0, 0.0, 1.0, map.h];
     std::array::from_fn(|k| p[k] - map.w2 * map.u[k] - map.cm * map.v[k])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ground::{record, synthetic};
+    use crate::physics::params::{Params, Settings};
+
+    #[test]
+    fn the_energy_balance_holds_to_round_off_over_a_record() {
+        // Every work term is exact (the maps' rows and the work sums, with
+        // the rest of each cached map's length to first order): the balance
+        // closes to round-off. Expected: below 1e-13 of the input energy
+        // (measured 2e-15 and 3e-16; without the first-order rest of the
+        // work the two-block scene is at 6e-11).
+        let gm = synthetic::default_record();
+        for n in [0, 2] {
+            let p = Params {
+                n_blocks: n,
+                ..Params::default()
+            };
+            let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+            record::run(&mut sim, &gm, 1.0).unwrap();
+            let o = sim.outputs();
+            let residual = (o.energy_residual() / o.e_input).abs();
+            assert!(residual < 1e-13, "N = {n}: {residual:e}");
+        }
+    }
 }
