@@ -19,9 +19,14 @@ use crate::physics::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+mod fmi3_cs;
 mod saved_state;
+pub mod state_table;
 mod stepping;
 mod values;
+
+pub use fmi3_cs::{StepOutcome, StepRequest};
+use state_table::Abi;
 
 /// FMI 2.0 status codes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -60,6 +65,8 @@ pub enum Phase {
     Terminated,
     /// After a failed step or a caught panic.
     Error,
+    /// FMI 3.0 Event Mode (Co-Simulation with `eventModeUsed`).
+    EventMode,
 }
 
 /// Values of every parameter, exactly as the importer set them.
@@ -141,6 +148,10 @@ pub struct Instance {
     record: Option<(RecordKey, Arc<GroundMotion>)>,
     outputs: Option<Outputs>,
     d: Dynamic,
+    /// The ABI the importer uses (messages name its functions).
+    abi: Abi,
+    /// FMI 3.0 `earlyReturnAllowed` and `eventModeUsed` of fmi3InstantiateCoSimulation.
+    fmi3_flags: (bool, bool),
 }
 
 /// Parses `file:///a/b`, `file:/a/b` or `file://localhost/a/b` (percent-decoded).
@@ -185,7 +196,16 @@ impl Instance {
             record: None,
             outputs: None,
             d: Dynamic::initial(),
+            abi: Abi::Fmi2,
+            fmi3_flags: (false, false),
         }
+    }
+
+    /// Marks the instance as created through the FMI 3.0 ABI, with its
+    /// `earlyReturnAllowed` and `eventModeUsed` (messages then name fmi3 functions).
+    pub fn use_fmi3(&mut self, early_return_allowed: bool, event_mode_used: bool) {
+        self.abi = Abi::Fmi3;
+        self.fmi3_flags = (early_return_allowed, event_mode_used);
     }
 
     /// The instance name given by the importer.
@@ -200,6 +220,7 @@ impl Instance {
 
     /// Logs an error of function `func` and returns `Status::Error`.
     pub fn error(&mut self, func: &str, message: impl AsRef<str>) -> Status {
+        let func = state_table::name_for(func, self.abi);
         self.logger.log(
             Status::Error,
             "logStatusError",
@@ -211,6 +232,7 @@ impl Instance {
     /// Logs a fatal error (a panic caught at the ABI) and marks the instance unusable.
     pub fn fatal(&mut self, func: &str, message: &str) -> Status {
         self.d.phase = Phase::Error;
+        let func = state_table::name_for(func, self.abi);
         self.logger.log(
             Status::Fatal,
             "logStatusFatal",
@@ -231,9 +253,10 @@ impl Instance {
         Status::Ok
     }
 
-    /// Errors unless the instance is in one of `allowed` phases.
-    fn require(&mut self, func: &str, allowed: &[Phase]) -> Result<(), Status> {
-        if allowed.contains(&self.d.phase) {
+    /// Errors unless function `func` is legal in the current state
+    /// ([`state_table`]).
+    fn require(&mut self, func: &str) -> Result<(), Status> {
+        if state_table::legal(func, self.d.phase) {
             Ok(())
         } else {
             let phase = self.d.phase;
@@ -244,7 +267,7 @@ impl Instance {
     /// fmi2SetupExperiment.
     pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Status {
         const F: &str = "fmi2SetupExperiment";
-        if let Err(s) = self.require(F, &[Phase::Instantiated]) {
+        if let Err(s) = self.require(F) {
             return s;
         }
         let in_range = |t: f64| t.abs() <= limits::MAX_TIME;
@@ -269,7 +292,7 @@ impl Instance {
 
     /// fmi2EnterInitializationMode.
     pub fn enter_initialization_mode(&mut self) -> Status {
-        if let Err(s) = self.require("fmi2EnterInitializationMode", &[Phase::Instantiated]) {
+        if let Err(s) = self.require("fmi2EnterInitializationMode") {
             return s;
         }
         self.d.phase = Phase::InitializationMode;
@@ -333,7 +356,7 @@ impl Instance {
     /// fmi2ExitInitializationMode: builds the simulator, reads the record.
     pub fn exit_initialization_mode(&mut self) -> Status {
         const F: &str = "fmi2ExitInitializationMode";
-        if let Err(s) = self.require(F, &[Phase::InitializationMode]) {
+        if let Err(s) = self.require(F) {
             return s;
         }
         if let Err(s) = self.build(F) {
@@ -345,10 +368,7 @@ impl Instance {
 
     /// fmi2Terminate.
     pub fn terminate(&mut self) -> Status {
-        if let Err(s) = self.require(
-            "fmi2Terminate",
-            &[Phase::StepComplete, Phase::InitializationMode],
-        ) {
+        if let Err(s) = self.require("fmi2Terminate") {
             return s;
         }
         self.d.phase = Phase::Terminated;

@@ -105,31 +105,14 @@ pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
 impl Instance {
     /// fmi2GetFMUstate.
     pub fn save(&mut self) -> Result<SavedState, Status> {
-        self.require(
-            "fmi2GetFMUstate",
-            &[
-                Phase::Instantiated,
-                Phase::InitializationMode,
-                Phase::StepComplete,
-                Phase::Terminated,
-            ],
-        )?;
+        self.require("fmi2GetFMUstate")?;
         Ok(SavedState(self.d.clone()))
     }
 
     /// fmi2SetFMUstate (re-reads the record if the state names another).
     pub fn restore(&mut self, state: &SavedState) -> Status {
         const F: &str = "fmi2SetFMUstate";
-        if let Err(s) = self.require(
-            F,
-            &[
-                Phase::Instantiated,
-                Phase::InitializationMode,
-                Phase::StepComplete,
-                Phase::Terminated,
-                Phase::Error,
-            ],
-        ) {
+        if let Err(s) = self.require(F) {
             return s;
         }
         self.d = state.0.clone();
@@ -191,6 +174,7 @@ impl Instance {
             2 => Phase::StepComplete,
             3 => Phase::Terminated,
             4 => Phase::Error,
+            5 => Phase::EventMode,
             x => return Err(format!("unknown phase {x}")),
         };
         let (start_time, stop, time) = (r.f64()?, r.f64()?, r.f64()?);

@@ -74,7 +74,7 @@ impl Instance {
         out: &mut [f64],
     ) -> Status {
         const F: &str = "fmi2GetRealOutputDerivatives";
-        if let Err(s) = self.require(F, &[Phase::StepComplete, Phase::Terminated]) {
+        if let Err(s) = self.require(F) {
             return s;
         }
         let exc = self.next_excitation();
@@ -117,14 +117,7 @@ impl Instance {
     /// next step (reset to zero after every step: without it the input is held).
     pub fn set_input_derivatives(&mut self, vrs: &[u32], orders: &[i32], values: &[f64]) -> Status {
         const F: &str = "fmi2SetRealInputDerivatives";
-        if let Err(s) = self.require(
-            F,
-            &[
-                Phase::Instantiated,
-                Phase::InitializationMode,
-                Phase::StepComplete,
-            ],
-        ) {
+        if let Err(s) = self.require(F) {
             return s;
         }
         for ((&vr, &order), &x) in vrs.iter().zip(orders).zip(values) {
@@ -156,7 +149,7 @@ impl Instance {
     /// fmi2DoStep.
     pub fn do_step(&mut self, t: f64, h: f64) -> Status {
         const F: &str = "fmi2DoStep";
-        if let Err(s) = self.require(F, &[Phase::StepComplete]) {
+        if let Err(s) = self.require(F) {
             return s;
         }
         let now = self.d.time;
