@@ -9,6 +9,36 @@ use std::io;
 /// The model identifier: the shared library's and the FMU's name.
 pub const MODEL_IDENTIFIER: &str = "StackedLiveLoad";
 
+/// The model's description (both FMI versions).
+pub(super) const DESCRIPTION: &str =
+    "Linear SDOF structure carrying a stack of up to 8 rigid blocks that stick or slide with \
+     Coulomb friction, under ground acceleration; event-located RK4";
+
+/// The generation tool (both FMI versions).
+pub(super) fn tool() -> String {
+    format!("stacked-live-load {}", env!("CARGO_PKG_VERSION"))
+}
+
+/// The log categories (both FMI versions).
+pub(super) const LOG_CATEGORIES: [(&str, &str); 3] = [
+    (
+        "logStatusError",
+        "Errors: bad input, illegal calls, unreadable records",
+    ),
+    (
+        "logStatusFatal",
+        "Internal errors caught at the C interface",
+    ),
+    ("logAll", "Diagnostics, when debug logging is on"),
+];
+
+/// The default experiment: the embedded default record (both FMI versions).
+pub(super) const DEFAULT_EXPERIMENT: [(&str, &str); 3] = [
+    ("startTime", "0.0"),
+    ("stopTime", "20.0"),
+    ("stepSize", "0.005"),
+];
+
 /// The whole model description, UTF-8, deterministic.
 pub fn model_description() -> String {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
@@ -20,10 +50,8 @@ pub fn model_description() -> String {
 
 fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-    let description =
-        "Linear SDOF structure carrying a stack of up to 8 rigid blocks that stick or slide with \
-                       Coulomb friction, under ground acceleration; event-located RK4";
-    let tool = format!("stacked-live-load {}", env!("CARGO_PKG_VERSION"));
+    let description = DESCRIPTION;
+    let tool = tool();
     let variables = table();
     w.create_element("fmiModelDescription")
         .with_attributes([
@@ -52,17 +80,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
             write_units(w)?;
             write_types(w)?;
             w.create_element("LogCategories").write_inner_content(|w| {
-                for (name, text) in [
-                    (
-                        "logStatusError",
-                        "Errors: bad input, illegal calls, unreadable records",
-                    ),
-                    (
-                        "logStatusFatal",
-                        "Internal errors caught at the C interface",
-                    ),
-                    ("logAll", "Diagnostics, when debug logging is on"),
-                ] {
+                for (name, text) in LOG_CATEGORIES {
                     w.create_element("Category")
                         .with_attributes([("name", name), ("description", text)])
                         .write_empty()?;
@@ -70,11 +88,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                 Ok(())
             })?;
             w.create_element("DefaultExperiment")
-                .with_attributes([
-                    ("startTime", "0.0"),
-                    ("stopTime", "20.0"),
-                    ("stepSize", "0.005"),
-                ])
+                .with_attributes(DEFAULT_EXPERIMENT)
                 .write_empty()?;
             w.create_element("ModelVariables")
                 .write_inner_content(|w| {
@@ -88,7 +102,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     Ok(())
 }
 
-fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+pub(super) fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     w.create_element("UnitDefinitions")
         .write_inner_content(|w| {
             for &(name, kg, m, s) in UNITS {
@@ -164,12 +178,29 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
             if let Some(s) = &v.start {
                 attrs.push(("start", s.as_str()));
             }
+            let bounds = bounds(v.id);
+            attrs.extend(bounds.iter().map(|(k, x)| (*k, x.as_str())));
             w.create_element(element)
                 .with_attributes(attrs)
                 .write_empty()?;
             Ok(())
         })?;
     Ok(())
+}
+
+/// `min` and `max` of a variable with a range ([`Id::range`]), as written in
+/// the XML (integers without a decimal point).
+pub(super) fn bounds(id: Id) -> Vec<(&'static str, String)> {
+    let number = |x: f64| match id.kind() {
+        Kind::Real => format!("{x:?}"),
+        _ => format!("{}", x as i64),
+    };
+    let Some((lo, hi)) = id.range() else {
+        return vec![];
+    };
+    let mut out = vec![("min", number(lo))];
+    out.extend(hi.map(|hi| ("max", number(hi))));
+    out
 }
 
 /// Every output is listed in `Outputs` with the inputs it depends on at the

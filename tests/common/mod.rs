@@ -77,6 +77,8 @@ pub struct ExactResult {
     pub u: Vec<f64>,
     pub v: Vec<f64>,
     pub events: usize,
+    /// The time of every event (s, record time), in order.
+    pub event_times: Vec<f64>,
     /// u0 at every record sample.
     pub u0_history: Vec<f64>,
 }
@@ -212,6 +214,7 @@ impl Exact {
             u: vec![],
             v: vec![],
             events: 0,
+            event_times: vec![],
             u0_history: vec![0.0],
         };
         let mut cache: Option<(Mode, f64, DMatrix<f64>, DMatrix<f64>)> = None;
@@ -306,6 +309,7 @@ impl Exact {
                             }
                         }
                         res.events += 1;
+                        res.event_times.push(t_a + tau);
                         let abs_u0 = z[0].abs();
                         res.peak_u0 = res.peak_u0.max(abs_u0);
                     }

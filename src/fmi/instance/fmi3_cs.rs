@@ -123,7 +123,9 @@ impl Instance {
         if status != Status::Ok || ts >= t + h - EDGE {
             return (status, false);
         }
-        let edge = EDGE * t.abs().max(1.0);
+        // A sliver past a switch: EDGE, or a few units of the last place at
+        // times where EDGE would not move time.
+        let edge = EDGE.max(8.0 * f64::EPSILON * t.abs());
         if ts <= t + EDGE {
             // The step starts on a switch: take it over a sliver, then look
             // for the next one in the rest (the engine reports the first).
