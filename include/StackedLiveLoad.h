@@ -3,6 +3,7 @@
 #ifndef STACKED_LIVE_LOAD_H
 #define STACKED_LIVE_LOAD_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 

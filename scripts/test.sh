@@ -7,4 +7,4 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cargo test --all-targets 2>&1
 cargo build --release --bin engine_run
-.venv/bin/python -m pytest tests/python -q -p no:cacheprovider 2>&1
+.venv/bin/python -m pytest tests/python -q -rs -p no:cacheprovider 2>&1
