@@ -12,7 +12,7 @@ use common::*;
 use stacked_live_load::fmi::instance::{Instance, NullSink, Phase, Status, StepRequest};
 use stacked_live_load::fmi::variables::Id;
 use stacked_live_load::*;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Tolerance on a switch time (s): the issue's.
 const TIME_TOL: f64 = 1e-9;
@@ -47,7 +47,7 @@ fn scenes() -> Vec<(&'static str, Params)> {
     ]
 }
 
-fn instance(p: &Params, file: &PathBuf, early: bool, event_mode: bool) -> Instance {
+fn instance(p: &Params, file: &Path, early: bool, event_mode: bool) -> Instance {
     let mut inst = Instance::new("fmi3", None, Box::new(NullSink), false);
     inst.use_fmi3(early, event_mode);
     assert_eq!(
@@ -93,7 +93,7 @@ struct Run {
     events_across: Vec<(i32, i32)>,
 }
 
-fn run(p: &Params, file: &PathBuf, h: f64, early: bool, event_mode: bool) -> Run {
+fn run(p: &Params, file: &Path, h: f64, early: bool, event_mode: bool) -> Run {
     let mut inst = instance(p, file, early, event_mode);
     let mut out = Run {
         early: vec![],

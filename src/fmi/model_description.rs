@@ -147,14 +147,19 @@ fn write_types(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     Ok(())
 }
 
-fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
-    let kind = v.id.kind();
-    let (causality, variability) = match (v.id.causality(), kind) {
+/// `causality` and `variability` of a variable (both FMI versions).
+pub(super) fn causality_and_variability(id: Id) -> (&'static str, &'static str) {
+    match (id.causality(), id.kind()) {
         (Causality::Parameter, _) => ("parameter", "fixed"),
         (Causality::Input, _) => ("input", "continuous"),
-        (Causality::Output, Kind::Real) if v.id.is_continuous() => ("output", "continuous"),
+        (Causality::Output, Kind::Real) if id.is_continuous() => ("output", "continuous"),
         (Causality::Output, _) => ("output", "discrete"),
-    };
+    }
+}
+
+fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
+    let kind = v.id.kind();
+    let (causality, variability) = causality_and_variability(v.id);
     let vr = v.id.vr().to_string();
     w.create_element("ScalarVariable")
         .with_attributes([

@@ -5,7 +5,8 @@
 //! Co-Simulation capabilities of this ABI (early return, Event Mode).
 
 use super::model_description::{
-    bounds, tool, write_units, DEFAULT_EXPERIMENT, DESCRIPTION, LOG_CATEGORIES, MODEL_IDENTIFIER,
+    bounds, causality_and_variability, tool, write_units, DEFAULT_EXPERIMENT, DESCRIPTION,
+    LOG_CATEGORIES, MODEL_IDENTIFIER,
 };
 use crate::fmi::c_api::GUID;
 use crate::fmi::variables::{table, Causality, Id, Kind, Variable, TYPES};
@@ -102,12 +103,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
 
 fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
     let kind = v.id.kind();
-    let (causality, variability) = match (v.id.causality(), kind) {
-        (Causality::Parameter, _) => ("parameter", "fixed"),
-        (Causality::Input, _) => ("input", "continuous"),
-        (Causality::Output, Kind::Real) if v.id.is_continuous() => ("output", "continuous"),
-        (Causality::Output, _) => ("output", "discrete"),
-    };
+    let (causality, variability) = causality_and_variability(v.id);
     let element = match kind {
         Kind::Real => "Float64",
         Kind::Integer => "Int32",

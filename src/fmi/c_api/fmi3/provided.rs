@@ -130,35 +130,33 @@ pub unsafe extern "C" fn fmi3GetFloat64(
     values: *mut fmi3Float64,
     nValues: usize,
 ) -> fmi3Status {
-    const F: &str = "fmi3GetFloat64";
-    with(instance, F, |comp| {
-        let i = &mut comp.instance;
-        let (Some(vrs), Some(out)) = (
-            slice(valueReferences, nValueReferences),
-            slice_mut(values, nValues),
-        ) else {
-            return null_argument(i, F);
-        };
-        if let Err(s) = scalars_only(i, F, vrs.len(), out.len()) {
-            return s;
-        }
-        // The state check of the getter, for `time` too.
-        match i.get_real(&[], &mut []) {
-            Status::Ok => {}
-            s => return s,
-        }
-        for (&vr, slot) in vrs.iter().zip(out.iter_mut()) {
-            if vr == TIME_VR {
-                *slot = i.time_now();
-                continue;
-            }
-            match i.get_real(&[vr], std::slice::from_mut(slot)) {
+    let (vr, nvr) = (valueReferences, nValueReferences);
+    getter(
+        instance,
+        "fmi3GetFloat64",
+        vr,
+        nvr,
+        values,
+        nValues,
+        |i, vrs, out| {
+            // The state check of the getter, for `time` too.
+            match i.get_real(&[], &mut []) {
                 Status::Ok => {}
                 s => return s,
             }
-        }
-        Status::Ok
-    })
+            for (&vr, slot) in vrs.iter().zip(out.iter_mut()) {
+                if vr == TIME_VR {
+                    *slot = i.time_now();
+                    continue;
+                }
+                match i.get_real(&[vr], std::slice::from_mut(slot)) {
+                    Status::Ok => {}
+                    s => return s,
+                }
+            }
+            Status::Ok
+        },
+    )
 }
 
 /// The value reference of `time`, the independent variable (FMI 3.0 only).
@@ -176,6 +174,50 @@ fn scalars_only(i: &mut Instance, func: &str, nvr: usize, nvalues: usize) -> Res
     }
 }
 
+/// A getter's arguments, checked (pointers, one value per reference), to `f`.
+unsafe fn getter<T>(
+    instance: fmi3Instance,
+    func: &str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut T,
+    nvalues: usize,
+    f: impl FnOnce(&mut Instance, &[u32], &mut [T]) -> Status,
+) -> fmi3Status {
+    with(instance, func, |comp| {
+        let i = &mut comp.instance;
+        match (slice(vr, nvr), slice_mut(values, nvalues)) {
+            (Some(vrs), Some(out)) => match scalars_only(i, func, vrs.len(), out.len()) {
+                Ok(()) => f(i, vrs, out),
+                Err(s) => s,
+            },
+            _ => null_argument(i, func),
+        }
+    })
+}
+
+/// A setter's arguments, checked (pointers, one value per reference), to `f`.
+unsafe fn setter<T>(
+    instance: fmi3Instance,
+    func: &str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const T,
+    nvalues: usize,
+    f: impl FnOnce(&mut Instance, &[u32], &[T]) -> Status,
+) -> fmi3Status {
+    with(instance, func, |comp| {
+        let i = &mut comp.instance;
+        match (slice(vr, nvr), slice(values, nvalues)) {
+            (Some(vrs), Some(x)) => match scalars_only(i, func, vrs.len(), x.len()) {
+                Ok(()) => f(i, vrs, x),
+                Err(s) => s,
+            },
+            _ => null_argument(i, func),
+        }
+    })
+}
+
 /// Reads Int32 variables (`nBlocks`, `solver`, `nEvents`, `nAmbiguous`).
 #[no_mangle]
 pub unsafe extern "C" fn fmi3GetInt32(
@@ -185,20 +227,16 @@ pub unsafe extern "C" fn fmi3GetInt32(
     values: *mut fmi3Int32,
     nValues: usize,
 ) -> fmi3Status {
-    const F: &str = "fmi3GetInt32";
-    with(instance, F, |comp| {
-        let i = &mut comp.instance;
-        match (
-            slice(valueReferences, nValueReferences),
-            slice_mut(values, nValues),
-        ) {
-            (Some(vrs), Some(out)) => match scalars_only(i, F, vrs.len(), out.len()) {
-                Ok(()) => i.get_integer(vrs, out),
-                Err(s) => s,
-            },
-            _ => null_argument(i, F),
-        }
-    })
+    let (vr, nvr) = (valueReferences, nValueReferences);
+    getter(
+        instance,
+        "fmi3GetInt32",
+        vr,
+        nvr,
+        values,
+        nValues,
+        |i, vrs, out| i.get_integer(vrs, out),
+    )
 }
 
 /// Reads Boolean variables (`stuck[j]`).
@@ -210,29 +248,23 @@ pub unsafe extern "C" fn fmi3GetBoolean(
     values: *mut fmi3Boolean,
     nValues: usize,
 ) -> fmi3Status {
-    const F: &str = "fmi3GetBoolean";
-    with(instance, F, |comp| {
-        let i = &mut comp.instance;
-        match (
-            slice(valueReferences, nValueReferences),
-            slice_mut(values, nValues),
-        ) {
-            (Some(vrs), Some(out)) => {
-                if let Err(s) = scalars_only(i, F, vrs.len(), out.len()) {
-                    return s;
-                }
-                let mut ints = vec![0; vrs.len()];
-                let status = i.get_boolean(vrs, &mut ints);
-                if status == Status::Ok {
-                    for (slot, x) in out.iter_mut().zip(ints) {
-                        *slot = x != 0;
-                    }
-                }
-                status
+    let (vr, nvr) = (valueReferences, nValueReferences);
+    getter(
+        instance,
+        "fmi3GetBoolean",
+        vr,
+        nvr,
+        values,
+        nValues,
+        |i, vrs, out| {
+            let mut ints = vec![0; vrs.len()];
+            let status = i.get_boolean(vrs, &mut ints);
+            for (slot, x) in out.iter_mut().zip(ints) {
+                *slot = x != 0;
             }
-            _ => null_argument(i, F),
-        }
-    })
+            status
+        },
+    )
 }
 
 /// Reads String variables (`recordFile`); valid until the next call on the instance.
@@ -266,20 +298,16 @@ pub unsafe extern "C" fn fmi3SetFloat64(
     values: *const fmi3Float64,
     nValues: usize,
 ) -> fmi3Status {
-    const F: &str = "fmi3SetFloat64";
-    with(instance, F, |comp| {
-        let i = &mut comp.instance;
-        match (
-            slice(valueReferences, nValueReferences),
-            slice(values, nValues),
-        ) {
-            (Some(vrs), Some(x)) => match scalars_only(i, F, vrs.len(), x.len()) {
-                Ok(()) => i.set_real(vrs, x),
-                Err(s) => s,
-            },
-            _ => null_argument(i, F),
-        }
-    })
+    let (vr, nvr) = (valueReferences, nValueReferences);
+    setter(
+        instance,
+        "fmi3SetFloat64",
+        vr,
+        nvr,
+        values,
+        nValues,
+        |i, vrs, x| i.set_real(vrs, x),
+    )
 }
 
 /// Sets `nBlocks` (0..8) or `solver` (1, 2 or 3).
@@ -291,20 +319,16 @@ pub unsafe extern "C" fn fmi3SetInt32(
     values: *const fmi3Int32,
     nValues: usize,
 ) -> fmi3Status {
-    const F: &str = "fmi3SetInt32";
-    with(instance, F, |comp| {
-        let i = &mut comp.instance;
-        match (
-            slice(valueReferences, nValueReferences),
-            slice(values, nValues),
-        ) {
-            (Some(vrs), Some(x)) => match scalars_only(i, F, vrs.len(), x.len()) {
-                Ok(()) => i.set_integer(vrs, x),
-                Err(s) => s,
-            },
-            _ => null_argument(i, F),
-        }
-    })
+    let (vr, nvr) = (valueReferences, nValueReferences);
+    setter(
+        instance,
+        "fmi3SetInt32",
+        vr,
+        nvr,
+        values,
+        nValues,
+        |i, vrs, x| i.set_integer(vrs, x),
+    )
 }
 
 /// No settable Boolean: always an error (unless no value reference is given).
@@ -316,20 +340,16 @@ pub unsafe extern "C" fn fmi3SetBoolean(
     values: *const fmi3Boolean,
     nValues: usize,
 ) -> fmi3Status {
-    const F: &str = "fmi3SetBoolean";
-    with(instance, F, |comp| {
-        let i = &mut comp.instance;
-        match (
-            slice(valueReferences, nValueReferences),
-            slice(values, nValues),
-        ) {
-            (Some(vrs), Some(x)) => match scalars_only(i, F, vrs.len(), x.len()) {
-                Ok(()) => i.set_boolean(vrs, &x.iter().map(|&b| i32::from(b)).collect::<Vec<_>>()),
-                Err(s) => s,
-            },
-            _ => null_argument(i, F),
-        }
-    })
+    let (vr, nvr) = (valueReferences, nValueReferences);
+    setter(
+        instance,
+        "fmi3SetBoolean",
+        vr,
+        nvr,
+        values,
+        nValues,
+        |i, vrs, x| i.set_boolean(vrs, &x.iter().map(|&b| i32::from(b)).collect::<Vec<_>>()),
+    )
 }
 
 /// Sets `recordFile`.
