@@ -9,7 +9,7 @@
 //! are exported but not provided (Model Exchange, clocks, other value types)
 //! have no row: they fail in every state, with a message.
 
-use super::Phase;
+use super::{Instance, Phase, Status};
 
 /// The ABI an instance was created through.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -139,6 +139,14 @@ pub fn name_for(name: &str, abi: Abi) -> &str {
         (Some(r), Abi::Fmi2) if !r.fmi2.is_empty() => r.fmi2,
         (Some(r), Abi::Fmi3) if !r.fmi3.is_empty() => r.fmi3,
         _ => name,
+    }
+}
+
+impl Instance {
+    /// Errors (logged) unless `func` is legal now: for calls that the C API
+    /// answers without another instance method (the FMI 2.0 status queries).
+    pub fn check_call(&mut self, func: &str) -> Result<(), Status> {
+        self.require(func)
     }
 }
 
