@@ -6,14 +6,16 @@
 //! Three rooms, each using only the ones listed before it:
 //! - [`physics`]: the scene, stick/slip modes, the integrators.
 //! - [`ground`]: ground-motion records and driving a simulation through one.
-//! - [`fmi`]: the FMU (instance state machine, variables, C API) and the
-//!   batch entry point beside it.
+//! - [`fmi`]: the FMU (instance state machine, variables, C API).
+//! - [`batch`]: `sllRunBatch`, many parameter sets over one record in one
+//!   call, beside the FMI API (for parametric studies).
 //!
 //! [`limits`] holds the bounds that keep an instance safe inside its host
 //! process; all three rooms read them.
 
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod fmi;
 pub mod ground;
 pub mod limits;

@@ -7,10 +7,7 @@
 //! - [`model_description`], [`model_description_fmi3`]: the FMI 2.0 and 3.0
 //!   `modelDescription.xml`, generated from the table.
 //! - [`ports`]: the outputs' input dependencies and time derivatives.
-//! - [`batch`]: `sllRunBatch`, many parameter sets over one record in one
-//!   call (beside the FMI API, for parametric studies).
 
-pub mod batch;
 pub mod c_api;
 pub mod instance;
 pub mod model_description;
