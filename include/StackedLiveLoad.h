@@ -8,6 +8,71 @@
 #include <stdint.h>
 
 /**
+ * One parameter set (all doubles, in this order: the C layout is 28
+ * consecutive doubles). Entries beyond `nBlocks` are ignored.
+ */
+typedef struct SllBatchParams {
+  /**
+   * Blocks in the stack: an integer 0..8.
+   */
+  double nBlocks;
+  /**
+   * Structure mass (kg).
+   */
+  double mp;
+  /**
+   * Bare period (s).
+   */
+  double Tp;
+  /**
+   * Damping ratio.
+   */
+  double zeta;
+  /**
+   * Block mass / mp, blocks 1..8.
+   */
+  double alpha[MAX_BLOCKS];
+  /**
+   * Static friction of interfaces 1..8.
+   */
+  double mus[MAX_BLOCKS];
+  /**
+   * Kinetic friction of interfaces 1..8.
+   */
+  double muk[MAX_BLOCKS];
+} SllBatchParams;
+
+/**
+ * The results of one set (13 consecutive doubles in C).
+ */
+typedef struct SllBatchOutputs {
+  /**
+   * Largest |up| (m).
+   */
+  double peakUp;
+  /**
+   * Largest |apAbs| (m/s²).
+   */
+  double peakApAbs;
+  /**
+   * Input energy at the end (J).
+   */
+  double Einput;
+  /**
+   * Stick/slip switches.
+   */
+  double nEvents;
+  /**
+   * Switches decided by the selection rule.
+   */
+  double nAmbiguous;
+  /**
+   * Largest |slip[j]|, interfaces 1..8 (0 beyond nBlocks).
+   */
+  double peakSlip[MAX_BLOCKS];
+} SllBatchOutputs;
+
+/**
  * fmi2OK = 0, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending.
  */
 typedef int fmi2Status;
@@ -216,9 +281,8 @@ extern "C" {
  * - `recordFile`: a PEER `.AT2` (in g, converted with `g`) or CSV
  *   `time,accel` (m/s²) file, as the FMU's `recordFile` (an absolute or
  *   working-directory-relative path); multiplied by `recordScale`.
- * - `params`: `nSets` × 28 doubles per set: nBlocks, mp, Tp, zeta, alpha[1..8], mus[1..8], muk[1..8].
- * - `outputs`: room for `nSets` × 13 doubles: peakUp, peakApAbs, Einput, nEvents, nAmbiguous,
- *   peakSlip[1..8].
+ * - `params`: `nSets` parameter sets ([`SllBatchParams`]).
+ * - `outputs`: room for `nSets` results ([`SllBatchOutputs`]).
  * - `message`, `messageSize`: a buffer for the error message (may be NULL).
  *
  * Returns 0 (fmi2OK), or 3 (fmi2Error) with a message naming the set and
@@ -230,8 +294,8 @@ int sllRunBatch(const char *recordFile,
                 double g,
                 double recordScale,
                 int nSets,
-                const double *params,
-                double *outputs,
+                const struct SllBatchParams *params,
+                struct SllBatchOutputs *outputs,
                 char *message,
                 uintptr_t messageSize);
 
