@@ -31,15 +31,15 @@ typedef struct SllBatchParams {
   /**
    * Block mass / mp, blocks 1..8.
    */
-  double alpha[MAX_BLOCKS];
+  double alpha[8];
   /**
    * Static friction of interfaces 1..8.
    */
-  double mus[MAX_BLOCKS];
+  double mus[8];
   /**
    * Kinetic friction of interfaces 1..8.
    */
-  double muk[MAX_BLOCKS];
+  double muk[8];
 } SllBatchParams;
 
 /**
@@ -69,7 +69,7 @@ typedef struct SllBatchOutputs {
   /**
    * Largest |slip[j]|, interfaces 1..8 (0 beyond nBlocks).
    */
-  double peakSlip[MAX_BLOCKS];
+  double peakSlip[8];
 } SllBatchOutputs;
 
 /**

@@ -28,11 +28,11 @@ pub struct SllBatchParams {
     /// Damping ratio.
     pub zeta: f64,
     /// Block mass / mp, blocks 1..8.
-    pub alpha: [f64; MAX_BLOCKS],
+    pub alpha: [f64; 8],
     /// Static friction of interfaces 1..8.
-    pub mus: [f64; MAX_BLOCKS],
+    pub mus: [f64; 8],
     /// Kinetic friction of interfaces 1..8.
-    pub muk: [f64; MAX_BLOCKS],
+    pub muk: [f64; 8],
 }
 
 /// The results of one set (13 consecutive doubles in C).
@@ -50,7 +50,7 @@ pub struct SllBatchOutputs {
     /// Switches decided by the selection rule.
     pub nAmbiguous: f64,
     /// Largest |slip[j]|, interfaces 1..8 (0 beyond nBlocks).
-    pub peakSlip: [f64; MAX_BLOCKS],
+    pub peakSlip: [f64; 8],
 }
 
 /// Doubles per parameter set (the Python side, `scripts/sll`, passes flat
@@ -58,7 +58,8 @@ pub struct SllBatchOutputs {
 pub const BATCH_PARAMS: usize = std::mem::size_of::<SllBatchParams>() / 8;
 /// Doubles per result.
 pub const BATCH_OUTPUTS: usize = std::mem::size_of::<SllBatchOutputs>() / 8;
-const _: () = assert!(BATCH_PARAMS == 4 + 3 * MAX_BLOCKS && BATCH_OUTPUTS == 5 + MAX_BLOCKS);
+// The arrays are 8 long in C (the header has no MAX_BLOCKS).
+const _: () = assert!(MAX_BLOCKS == 8 && BATCH_PARAMS == 28 && BATCH_OUTPUTS == 13);
 
 /// Runs `nSets` parameter sets over one record.
 ///

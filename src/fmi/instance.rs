@@ -52,7 +52,8 @@ pub trait LogSink {
     fn log(&self, status: Status, category: &str, message: &str);
 }
 
-/// The states of the FMI 2.0 Co-Simulation state machine.
+/// The states of the FMI 2.0 and FMI 3.0 Co-Simulation state machines
+/// (`StepComplete` is FMI 3.0's Step Mode).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
     /// After fmi2Instantiate or fmi2Reset.

@@ -4,8 +4,10 @@
  * and compares the printed numbers.
  * FMI 2.0: the paper's stack under RECORD for 2 s in steps of 0.01 s, the
  * state saved at 1 s and restored, the second pass bit-identical to the first.
- * FMI 3.0: the same with early return allowed: every early-return time.
- * Usage: platform_harness LIBRARY GUID RECORD; prints "name value" lines
+ * FMI 3.0: the same with early return allowed: every early-return time; with
+ * RESOURCES (the folder holding default_record.csv, a native path), through
+ * resourcePath and the relative recordFile "default_record.csv".
+ * Usage: platform_harness LIBRARY GUID RECORD [RESOURCES]; prints "name value" lines
  * (%.17g), exit 0 on success. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -90,13 +92,14 @@ static int fmi2(const char *guid, const char *record) {
     return 0;
 }
 
-static int fmi3(const char *guid, const char *record) {
+static int fmi3(const char *guid, const char *record, const char *resources) {
     LOAD(fmi3InstantiateCoSimulation); LOAD(fmi3EnterInitializationMode);
     LOAD(fmi3ExitInitializationMode); LOAD(fmi3SetString); LOAD(fmi3GetFloat64);
     LOAD(fmi3DoStep); LOAD(fmi3FreeInstance);
-    fmi3Instance c = p_fmi3InstantiateCoSimulation("harness", guid, NULL, false, false, false,
-                                                   true, NULL, 0, NULL, logger3, NULL);
+    fmi3Instance c = p_fmi3InstantiateCoSimulation("harness", guid, resources, false, false,
+                                                   false, true, NULL, 0, NULL, logger3, NULL);
     if (!c) return 1;
+    if (resources) record = "default_record.csv";
     const unsigned record_vr = 600;
     CHECK(p_fmi3SetString(c, &record_vr, 1, &record, 1));
     CHECK(p_fmi3EnterInitializationMode(c, false, 0.0, 0.0, true, 2.0));
@@ -123,13 +126,13 @@ static int fmi3(const char *guid, const char *record) {
 }
 
 int main(int argc, char **argv) {
-    if (argc != 4) return 2;
+    if (argc != 4 && argc != 5) return 2;
     lib = OPEN(argv[1]);
     if (!lib) {
         fprintf(stderr, "cannot load %s\n", argv[1]);
         return 2;
     }
     if (fmi2(argv[2], argv[3]) != 0) return 1;
-    if (fmi3(argv[2], argv[3]) != 0) return 1;
+    if (fmi3(argv[2], argv[3], argc == 5 ? argv[4] : NULL) != 0) return 1;
     return 0;
 }

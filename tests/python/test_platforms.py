@@ -109,10 +109,15 @@ def test_windows_dll_under_wine(fmus, native, version, tmp_path):
     subprocess.run([mingw, "-shared", "-O2", "-o", str(tmp_path / "bcryptprimitives.dll"),
                     str(SHIM), "-ladvapi32"], check=True)
     shutil.copy(RECORD, tmp_path / "record.csv")
+    shutil.copy(RECORD, tmp_path / "default_record.csv")
     win = lambda p: "Z:" + str(p).replace("/", "\\")  # noqa: E731  (wine maps / to Z:)
     env = dict(os.environ, WINEPREFIX=str(tmp_path / "prefix"), WINEDEBUG="-all")
-    got = run([wine, str(tmp_path / "harness.exe"), win(dll), guid(), win(tmp_path / "record.csv")],
-              env=env)
+    # FMI 3.0 reads the record relative to resourcePath (a native Windows
+    # path); FMI 2.0 by its absolute path (its resource URI's Windows forms
+    # are issue #24's parser).
+    resources = win(tmp_path) + "\\"
+    got = run([wine, str(tmp_path / "harness.exe"), win(dll), guid(), win(tmp_path / "record.csv"),
+               resources], env=env)
     check_same(f"FMI {version}.0 Windows DLL under wine", got, native)
 
 

@@ -57,7 +57,7 @@ pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
         return Err("a saved input is not finite".into());
     }
     let Some(sim) = &d.sim else {
-        if d.phase == Phase::StepComplete {
+        if matches!(d.phase, Phase::StepComplete | Phase::EventMode) {
             return Err("a saved state ready to step has no simulator".into());
         }
         // Before initialization each value was checked as it was set; the
