@@ -20,7 +20,7 @@ pub(super) fn tool() -> String {
 }
 
 /// The log categories (both FMI versions).
-pub(super) const LOG_CATEGORIES: [(&str, &str); 3] = [
+const LOG_CATEGORIES: [(&str, &str); 3] = [
     (
         "logStatusError",
         "Errors: bad input, illegal calls, unreadable records",
@@ -33,7 +33,7 @@ pub(super) const LOG_CATEGORIES: [(&str, &str); 3] = [
 ];
 
 /// The default experiment: the embedded default record (both FMI versions).
-pub(super) const DEFAULT_EXPERIMENT: [(&str, &str); 3] = [
+const DEFAULT_EXPERIMENT: [(&str, &str); 3] = [
     ("startTime", "0.0"),
     ("stopTime", "20.0"),
     ("stepSize", "0.005"),
@@ -79,17 +79,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                 .write_empty()?;
             write_units(w)?;
             write_types(w)?;
-            w.create_element("LogCategories").write_inner_content(|w| {
-                for (name, text) in LOG_CATEGORIES {
-                    w.create_element("Category")
-                        .with_attributes([("name", name), ("description", text)])
-                        .write_empty()?;
-                }
-                Ok(())
-            })?;
-            w.create_element("DefaultExperiment")
-                .with_attributes(DEFAULT_EXPERIMENT)
-                .write_empty()?;
+            write_log_categories_and_experiment(w)?;
             w.create_element("ModelVariables")
                 .write_inner_content(|w| {
                     for v in &variables {
@@ -99,6 +89,22 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                 })?;
             write_structure(w, &variables)
         })?;
+    Ok(())
+}
+
+/// `LogCategories` and `DefaultExperiment` (both FMI versions).
+pub(super) fn write_log_categories_and_experiment(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+    w.create_element("LogCategories").write_inner_content(|w| {
+        for (name, text) in LOG_CATEGORIES {
+            w.create_element("Category")
+                .with_attributes([("name", name), ("description", text)])
+                .write_empty()?;
+        }
+        Ok(())
+    })?;
+    w.create_element("DefaultExperiment")
+        .with_attributes(DEFAULT_EXPERIMENT)
+        .write_empty()?;
     Ok(())
 }
 

@@ -5,8 +5,8 @@
 //! Co-Simulation capabilities of this ABI (early return, Event Mode).
 
 use super::model_description::{
-    bounds, causality_and_variability, tool, write_units, DEFAULT_EXPERIMENT, DESCRIPTION,
-    LOG_CATEGORIES, MODEL_IDENTIFIER,
+    bounds, causality_and_variability, tool, write_log_categories_and_experiment, write_units,
+    DESCRIPTION, MODEL_IDENTIFIER,
 };
 use crate::fmi::c_api::GUID;
 use crate::fmi::variables::{table, Causality, Id, Kind, Variable, TYPES};
@@ -69,17 +69,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                     }
                     Ok(())
                 })?;
-            w.create_element("LogCategories").write_inner_content(|w| {
-                for (name, text) in LOG_CATEGORIES {
-                    w.create_element("Category")
-                        .with_attributes([("name", name), ("description", text)])
-                        .write_empty()?;
-                }
-                Ok(())
-            })?;
-            w.create_element("DefaultExperiment")
-                .with_attributes(DEFAULT_EXPERIMENT)
-                .write_empty()?;
+            write_log_categories_and_experiment(w)?;
             w.create_element("ModelVariables")
                 .write_inner_content(|w| {
                     w.create_element("Float64")
