@@ -183,6 +183,46 @@ fn early_returns_land_on_the_exact_switch_times() {
 }
 
 #[test]
+fn one_long_step_per_call_returns_at_the_same_switches() {
+    // A master that asks for the whole rest of the record at every call
+    // (probed in windows inside): the same early returns as on the 5 ms grid.
+    let (_, file) = record("long");
+    let p = Params::default();
+    let grid = run(&p, &file, 0.005, true, false);
+    let mut inst = instance(&p, &file, true, false);
+    let (mut t, mut early) = (0.0, vec![]);
+    let started = std::time::Instant::now();
+    while t < SECONDS {
+        let o = inst.do_step_fmi3(StepRequest { t, h: SECONDS - t });
+        assert_eq!(o.status, Status::Ok);
+        t = o.last_successful_time;
+        if o.early_return {
+            early.push(t);
+        }
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    assert_eq!(t, SECONDS);
+    assert_eq!(early.len(), grid.early.len());
+    let worst = early
+        .iter()
+        .zip(&grid.early)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    println!(
+        "{} early returns from whole-rest steps, worst |dt| to the 5 ms grid's {worst:.2e} s, {seconds:.3} s",
+        early.len()
+    );
+    assert!(worst <= TIME_TOL);
+    let up = real(&mut inst, Id::Up);
+    let want = grid.grid.last().unwrap()[0];
+    assert!(
+        (up - want).abs() <= 1e-9 * want.abs().max(1e-3),
+        "{up} vs {want}"
+    );
+    let _ = std::fs::remove_file(file);
+}
+
+#[test]
 fn grid_results_equal_stepping_without_early_return() {
     let (_, file) = record("grid");
     for (name, p) in scenes() {

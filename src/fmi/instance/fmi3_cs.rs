@@ -2,9 +2,9 @@
 //! return at the first stick/slip switch inside the step, and Event Mode
 //! (`fmi3EnterEventMode`, `fmi3UpdateDiscreteStates`, `fmi3EnterStepMode`).
 //!
-//! A step is first taken whole, as FMI 2.0 takes it; if the engine located a
-//! switch inside it (`tSwitch`), the step is taken again from its start up to
-//! that switch, and the FMU returns there (`earlyReturn`, `lastSuccessfulTime`
+//! A step is first taken whole, as FMI 2.0 takes it (a long one in windows
+//! of [`PROBE`] doubling); if the engine located a switch inside it
+//! (`tSwitch`), the step is taken again from its start up to that switch, and the FMU returns there (`earlyReturn`, `lastSuccessfulTime`
 //! the switch time). The state at an early return has the switch taken, as at
 //! any communication point (the outputs show the new mode); with Event Mode
 //! the outputs show the mode before the switch until `fmi3UpdateDiscreteStates`
@@ -19,6 +19,10 @@ use crate::fmi::ports::SWITCH_LOOKAHEAD;
 /// by rounding). The engine locates a switch again along other internal steps
 /// within 8e-12 s (docs/coupling-ports.md), so this is [`SWITCH_LOOKAHEAD`].
 pub const EDGE: f64 = SWITCH_LOOKAHEAD;
+
+/// The first window of a long step probed for a switch (s); windows double
+/// while they have none. Steps up to this long are taken whole first.
+pub const PROBE: f64 = 0.1;
 
 /// What `fmi3DoStep` reports besides its status.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -116,11 +120,43 @@ impl Instance {
     }
 
     /// The step from `t` over `h`, stopped at its first switch; whether it was.
+    /// A long step is probed in windows ([`PROBE`], doubling while none has a
+    /// switch), so that finding a switch early in it does not cost the
+    /// whole step.
     fn step_to_first_switch(&mut self, t: f64, h: f64, event_mode: bool) -> (Status, bool) {
+        let end = t + h;
+        let (mut from, mut window) = (t, PROBE);
+        loop {
+            let to = if from + window >= end - EDGE {
+                end
+            } else {
+                from + window
+            };
+            let (status, early) = self.window_to_first_switch(from, to - from, end, event_mode);
+            if status != Status::Ok || early {
+                return (status, early);
+            }
+            if to == end || self.d.time >= end {
+                self.d.time = end;
+                return (status, false);
+            }
+            from = self.d.time;
+            window *= 2.0;
+        }
+    }
+
+    /// One window from `t` over `h` of the step that ends at `end`.
+    fn window_to_first_switch(
+        &mut self,
+        t: f64,
+        h: f64,
+        end: f64,
+        event_mode: bool,
+    ) -> (Status, bool) {
         let before = (self.d.clone(), self.outputs.clone());
         let status = self.do_step(t, h);
         let ts = self.d.t_switch;
-        if status != Status::Ok || ts >= t + h - EDGE {
+        if status != Status::Ok || ts >= t + h || ts >= end - EDGE {
             return (status, false);
         }
         // A sliver past a switch: EDGE, or a few units of the last place at
@@ -131,11 +167,11 @@ impl Instance {
             // for the next one in the rest (the engine reports the first).
             (self.d, self.outputs) = before;
             let status = self.do_step(t, edge);
-            if status != Status::Ok || h <= 2.0 * edge {
+            if status != Status::Ok || end - t <= 2.0 * edge {
                 return (status, false);
             }
             let (status, early) =
-                self.step_to_first_switch(self.d.time, t + h - self.d.time, event_mode);
+                self.step_to_first_switch(self.d.time, end - self.d.time, event_mode);
             if !early && status == Status::Ok {
                 self.d.t_switch = ts;
             }
