@@ -211,6 +211,12 @@ fn time_is_value_reference_0_and_event_mode_follows_the_table() {
         // FMI 3.0 starts in Event Mode after initialization when it is used.
         assert_eq!(f.step(0.0, 0.1).0, ERROR);
         assert_eq!(f.last(), "fmi3DoStep: not allowed in state EventMode");
+        // Inputs set in Event Mode act at the event: a force on the structure
+        // (the stack stuck: apAbs = Fext / (1.5 mp), mp 1000 kg, alpha 0.25 + 0.25).
+        let fext = 101u32;
+        assert_eq!(fmi3SetFloat64(f.c, &fext, 1, &300.0, 1), OK);
+        let ap = f.get(&[202])[0];
+        assert!((ap - 300.0 / 1500.0).abs() <= 1e-12, "{ap}");
         let (mut a, mut b, mut c, mut d, mut e, mut next) = (true, true, true, true, true, 1.0);
         assert_eq!(
             fmi3UpdateDiscreteStates(f.c, &mut a, &mut b, &mut c, &mut d, &mut e, &mut next),
@@ -219,6 +225,7 @@ fn time_is_value_reference_0_and_event_mode_follows_the_table() {
         assert!(!(a || b || c || d || e));
         assert_eq!(fmi3EnterStepMode(f.c), OK);
         assert_eq!(fmi3SetFloat64(f.c, &AG, 1, &0.2, 1), OK); // below mu g: no switch
+        assert_eq!(fmi3SetFloat64(f.c, &fext, 1, &0.0, 1), OK);
         let (s, _, _, last) = f.step(0.0, 0.25);
         assert_eq!((s, last), (OK, 0.25));
         assert_eq!(f.get(&[TIME]), [0.25]);
