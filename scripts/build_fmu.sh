@@ -28,7 +28,10 @@ if [ "${SLL_CROSS:-1}" != 0 ]; then
       continue
     fi
     env_name="CARGO_TARGET_$(tr 'a-z-' 'A-Z_' <<<"$triple")_LINKER"
-    env "$env_name=$linker" cargo build --quiet --release --lib --target "$triple"
+    if ! env "$env_name=$linker" cargo build --quiet --release --lib --target "$triple"; then
+      echo "build_fmu: $triple left out: its cross build failed (above)" >&2
+      continue
+    fi
     built+=("target/$triple/release/$lib $fmi2dir $fmi3dir")
   done
 fi
