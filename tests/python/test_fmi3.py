@@ -122,3 +122,31 @@ def test_early_returns_land_on_every_switch(fmus, event_mode):
         assert len(pairs) == len(early)
         for left, right in pairs:
             assert right["nEvents"] > left["nEvents"]
+
+
+def test_a_second_importer_fmi_sim_returns_at_the_same_switches(fmus, tmp_path):
+    """fmi-sim (the Rust crate's FMI 3.0 importer) with early return and Event
+    Mode: the same switch times as fmpy's run of the FMI 2.0 FMU. Optional: not
+    installed by scripts/setup.sh (`cargo install fmi-sim` builds for ~10 min and
+    needs libclang-dev); found on PATH or through SLL_FMI_SIM."""
+    import os
+    import shutil
+    import subprocess
+
+    exe = os.environ.get("SLL_FMI_SIM") or shutil.which("fmi-sim")
+    if not exe:
+        pytest.skip("fmi-sim not installed (optional second FMI 3.0 importer: cargo install "
+                    "fmi-sim, with libclang-dev; or set SLL_FMI_SIM)")
+    fmi2, fmi3 = fmus
+    expected = switches_of_fmi2(run(fmi2))
+    for flags in (["--early-return-allowed"], ["--early-return-allowed", "--event-mode-used"]):
+        out = tmp_path / "out.csv"
+        subprocess.run([exe, "--model", str(fmi3), "-o", str(out), "co-simulation", "--step",
+                        str(DT), "-n", "0", "-f", str(SECONDS), *flags,
+                        "--init-values", "recordFile=default_record.csv"],
+                       check=True, capture_output=True, timeout=300)
+        t = np.loadtxt(out, delimiter=",", skiprows=1, usecols=0)
+        early = np.unique(t[np.abs(t - np.round(t / DT) * DT) > EDGE])
+        assert len(early) == len(expected), flags
+        assert np.max(np.abs(early - np.array(expected))) <= TIME_TOL, flags
+        print(f"fmi-sim {' '.join(flags)}: {len(early)} early returns at the FMI 2.0 switches")
