@@ -41,15 +41,22 @@ const DEFAULT_EXPERIMENT: [(&str, &str); 3] = [
 
 /// The whole model description, UTF-8, deterministic.
 pub fn model_description() -> String {
+    render(write)
+}
+
+/// An XML document written by `write` after the declaration (both FMI
+/// versions): UTF-8, indented, deterministic.
+pub(super) fn render(write: fn(&mut Writer<Vec<u8>>) -> io::Result<()>) -> String {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    write(&mut w).expect("writing to memory cannot fail");
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
+        .and_then(|_| write(&mut w))
+        .expect("writing to memory cannot fail");
     let mut text = String::from_utf8(w.into_inner()).expect("UTF-8");
     text.push('\n');
     text
 }
 
 fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
-    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
     let description = DESCRIPTION;
     let tool = tool();
     let variables = table();

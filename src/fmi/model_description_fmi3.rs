@@ -5,26 +5,20 @@
 //! Co-Simulation capabilities of this ABI (early return, Event Mode).
 
 use super::model_description::{
-    bounds, causality_and_variability, tool, write_log_categories_and_experiment, write_units,
-    DESCRIPTION, MODEL_IDENTIFIER,
+    bounds, causality_and_variability, render, tool, write_log_categories_and_experiment,
+    write_units, DESCRIPTION, MODEL_IDENTIFIER,
 };
 use crate::fmi::c_api::GUID;
 use crate::fmi::variables::{table, Causality, Id, Kind, Variable, TYPES};
-use quick_xml::events::{BytesDecl, Event};
 use quick_xml::Writer;
 use std::io;
 
 /// The whole FMI 3.0 model description, UTF-8, deterministic.
 pub fn model_description() -> String {
-    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    write(&mut w).expect("writing to memory cannot fail");
-    let mut text = String::from_utf8(w.into_inner()).expect("UTF-8");
-    text.push('\n');
-    text
+    render(write)
 }
 
 fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
-    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
     let tool = tool();
     let variables = table();
     w.create_element("fmiModelDescription")
