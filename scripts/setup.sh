@@ -16,4 +16,23 @@ if ! ldconfig -p | grep -q "libblas.so.3"; then
     || { $SUDO apt-get update -qq >/dev/null 2>&1 && $SUDO apt-get install -y -qq libblas3 liblapack3 >/dev/null 2>&1; }; } \
     || echo "setup: could not install libblas3/liblapack3; OpenSees comparisons will be skipped" >&2
 fi
+# Cross builds (Windows x86-64 and aarch64 Linux binaries in both FMUs) and the
+# emulators that test them (wine64, qemu-user). SLL_CROSS=0 skips them; where
+# anything cannot be installed the FMUs carry fewer platforms and the platform
+# tests say they were skipped and why.
+if [ "${SLL_CROSS:-1}" != 0 ]; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo -n"
+  rustup target add x86_64-pc-windows-gnu aarch64-unknown-linux-gnu >/dev/null 2>&1 \
+    || echo "setup: rustup could not add the cross targets; the FMUs will carry fewer platforms" >&2
+  need=()
+  command -v x86_64-w64-mingw32-gcc >/dev/null || need+=(gcc-mingw-w64-x86-64)
+  command -v aarch64-linux-gnu-gcc >/dev/null || need+=(gcc-aarch64-linux-gnu libc6-dev-arm64-cross)
+  command -v qemu-aarch64 >/dev/null || need+=(qemu-user)
+  { [ -x /usr/lib/wine/wine64 ] || command -v wine64 >/dev/null; } || need+=(wine64)
+  if [ ${#need[@]} -gt 0 ]; then
+    { $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq \
+        --no-install-recommends "${need[@]}"; } >/dev/null 2>&1 \
+      || echo "setup: could not install ${need[*]}; those platforms are left out or not tested" >&2
+  fi
+fi
 bash scripts/build_fmu.sh >/dev/null

@@ -1,19 +1,21 @@
 //! StackedLiveLoad: a linear SDOF structure carrying a stack of up to eight
 //! rigid blocks, each free to stick or slide with Coulomb friction on the
 //! body below, under ground acceleration (see `shared/MODEL.md`), exported
-//! as an FMI 2.0 Co-Simulation FMU.
+//! as an FMI 2.0 and an FMI 3.0 Co-Simulation FMU (one library for both).
 //!
-//! Three rooms, each using only the ones listed before it:
+//! Rooms, each using only the ones listed before it:
 //! - [`physics`]: the scene, stick/slip modes, the integrators.
 //! - [`ground`]: ground-motion records and driving a simulation through one.
-//! - [`fmi`]: the FMU (instance state machine, variables, C API) and the
-//!   batch entry point beside it.
+//! - [`fmi`]: the FMU (instance state machine, variables, C API).
+//! - [`batch`]: `sllRunBatch`, many parameter sets over one record in one
+//!   call, beside the FMI API (for parametric studies).
 //!
 //! [`limits`] holds the bounds that keep an instance safe inside its host
-//! process; all three rooms read them.
+//! process; all rooms read them.
 
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod fmi;
 pub mod ground;
 pub mod limits;

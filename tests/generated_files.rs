@@ -25,6 +25,14 @@ fn model_description_is_fresh() {
 }
 
 #[test]
+fn fmi3_model_description_is_fresh() {
+    check(
+        "modelDescription/fmi3/modelDescription.xml",
+        &stacked_live_load::fmi::model_description_fmi3::model_description(),
+    );
+}
+
+#[test]
 fn c_header_is_fresh() {
     let crate_dir = env!("CARGO_MANIFEST_DIR");
     let config = cbindgen::Config::from_root_or_default(crate_dir);

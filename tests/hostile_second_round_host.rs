@@ -214,7 +214,9 @@ fn run_case(case: &str) {
             eprintln!("1 chattering call stopped after {wall:.2} s");
         }
         "batch" => {
-            use stacked_live_load::fmi::batch::{sllRunBatch, BATCH_OUTPUTS, BATCH_PARAMS};
+            use stacked_live_load::batch::{
+                sllRunBatch, SllBatchOutputs, SllBatchParams, BATCH_OUTPUTS, BATCH_PARAMS,
+            };
             let run = |file: &Path, sets: &[f64]| {
                 let path = std::ffi::CString::new(file.display().to_string()).unwrap();
                 let n = sets.len() / BATCH_PARAMS;
@@ -227,8 +229,9 @@ fn run_case(case: &str) {
                         9.81,
                         1.0,
                         n as i32,
-                        sets.as_ptr(),
-                        out.as_mut_ptr(),
+                        // The typed structs have the layout of these flat arrays.
+                        sets.as_ptr() as *const SllBatchParams,
+                        out.as_mut_ptr() as *mut SllBatchOutputs,
                         msg.as_mut_ptr(),
                         400,
                     )

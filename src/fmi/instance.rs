@@ -21,9 +21,14 @@ use crate::physics::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
 
+mod fmi3_cs;
 mod saved_state;
+pub mod state_table;
 mod stepping;
 mod values;
+
+pub use fmi3_cs::{StepOutcome, StepRequest};
+use state_table::Abi;
 
 /// FMI 2.0 status codes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -49,7 +54,8 @@ pub trait LogSink {
     fn log(&self, status: Status, category: &str, message: &str);
 }
 
-/// The states of the FMI 2.0 Co-Simulation state machine.
+/// The states of the FMI 2.0 and FMI 3.0 Co-Simulation state machines
+/// (`StepComplete` is FMI 3.0's Step Mode).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
     /// After fmi2Instantiate or fmi2Reset.
@@ -62,6 +68,8 @@ pub enum Phase {
     Terminated,
     /// After a failed step or a caught panic.
     Error,
+    /// FMI 3.0 Event Mode (Co-Simulation with `eventModeUsed`).
+    EventMode,
 }
 
 /// Values of every parameter, exactly as the importer set them.
@@ -153,6 +161,10 @@ pub struct Instance {
     record_checked: bool,
     outputs: Option<Outputs>,
     d: Dynamic,
+    /// The ABI the importer uses (messages name its functions).
+    abi: Abi,
+    /// FMI 3.0 `earlyReturnAllowed` and `eventModeUsed` of fmi3InstantiateCoSimulation.
+    fmi3_flags: (bool, bool),
 }
 
 impl Instance {
@@ -202,7 +214,16 @@ impl Instance {
             record_checked: false,
             outputs: None,
             d: Dynamic::initial(),
+            abi: Abi::Fmi2,
+            fmi3_flags: (false, false),
         }
+    }
+
+    /// Marks the instance as created through the FMI 3.0 ABI, with its
+    /// `earlyReturnAllowed` and `eventModeUsed` (messages then name fmi3 functions).
+    pub fn use_fmi3(&mut self, early_return_allowed: bool, event_mode_used: bool) {
+        self.abi = Abi::Fmi3;
+        self.fmi3_flags = (early_return_allowed, event_mode_used);
     }
 
     /// The instance name given by the importer.
@@ -217,6 +238,7 @@ impl Instance {
 
     /// Logs an error of function `func` and returns `Status::Error`.
     pub fn error(&mut self, func: &str, message: impl AsRef<str>) -> Status {
+        let func = state_table::name_for(func, self.abi);
         self.logger.log(
             Status::Error,
             "logStatusError",
@@ -228,6 +250,7 @@ impl Instance {
     /// Logs a fatal error (a panic caught at the ABI) and marks the instance unusable.
     pub fn fatal(&mut self, func: &str, message: &str) -> Status {
         self.d.phase = Phase::Error;
+        let func = state_table::name_for(func, self.abi);
         self.logger.log(
             Status::Fatal,
             "logStatusFatal",
@@ -248,9 +271,10 @@ impl Instance {
         Status::Ok
     }
 
-    /// Errors unless the instance is in one of `allowed` phases.
-    fn require(&mut self, func: &str, allowed: &[Phase]) -> Result<(), Status> {
-        if allowed.contains(&self.d.phase) {
+    /// Errors unless function `func` is legal in the current state
+    /// ([`state_table`]).
+    fn require(&mut self, func: &str) -> Result<(), Status> {
+        if state_table::legal(func, self.d.phase) {
             Ok(())
         } else {
             let phase = self.d.phase;
@@ -261,7 +285,7 @@ impl Instance {
     /// fmi2SetupExperiment.
     pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Status {
         const F: &str = "fmi2SetupExperiment";
-        if let Err(s) = self.require(F, &[Phase::Instantiated]) {
+        if let Err(s) = self.require(F) {
             return s;
         }
         let in_range = |t: f64| t.abs() <= limits::MAX_TIME;
@@ -287,7 +311,7 @@ impl Instance {
 
     /// fmi2EnterInitializationMode.
     pub fn enter_initialization_mode(&mut self) -> Status {
-        if let Err(s) = self.require("fmi2EnterInitializationMode", &[Phase::Instantiated]) {
+        if let Err(s) = self.require("fmi2EnterInitializationMode") {
             return s;
         }
         self.d.phase = Phase::InitializationMode;
@@ -395,7 +419,7 @@ impl Instance {
     /// fmi2ExitInitializationMode: builds the simulator, reads the record.
     pub fn exit_initialization_mode(&mut self) -> Status {
         const F: &str = "fmi2ExitInitializationMode";
-        if let Err(s) = self.require(F, &[Phase::InitializationMode]) {
+        if let Err(s) = self.require(F) {
             return s;
         }
         if let Err(s) = self.build(F) {
@@ -407,10 +431,7 @@ impl Instance {
 
     /// fmi2Terminate.
     pub fn terminate(&mut self) -> Status {
-        if let Err(s) = self.require(
-            "fmi2Terminate",
-            &[Phase::StepComplete, Phase::InitializationMode],
-        ) {
+        if let Err(s) = self.require("fmi2Terminate") {
             return s;
         }
         self.d.phase = Phase::Terminated;

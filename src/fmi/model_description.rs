@@ -9,21 +9,56 @@ use std::io;
 /// The model identifier: the shared library's and the FMU's name.
 pub const MODEL_IDENTIFIER: &str = "StackedLiveLoad";
 
+/// The model's description (both FMI versions).
+pub(super) const DESCRIPTION: &str =
+    "Linear SDOF structure carrying a stack of up to 8 rigid blocks that stick or slide with \
+     Coulomb friction, under ground acceleration; exact stick/slip events";
+
+/// The generation tool (both FMI versions).
+pub(super) fn tool() -> String {
+    format!("stacked-live-load {}", env!("CARGO_PKG_VERSION"))
+}
+
+/// The log categories (both FMI versions).
+const LOG_CATEGORIES: [(&str, &str); 3] = [
+    (
+        "logStatusError",
+        "Errors: bad input, illegal calls, unreadable records",
+    ),
+    (
+        "logStatusFatal",
+        "Internal errors caught at the C interface",
+    ),
+    ("logAll", "Diagnostics, when debug logging is on"),
+];
+
+/// The default experiment: the embedded default record (both FMI versions).
+const DEFAULT_EXPERIMENT: [(&str, &str); 3] = [
+    ("startTime", "0.0"),
+    ("stopTime", "20.0"),
+    ("stepSize", "0.005"),
+];
+
 /// The whole model description, UTF-8, deterministic.
 pub fn model_description() -> String {
+    render(write)
+}
+
+/// An XML document written by `write` after the declaration (both FMI
+/// versions): UTF-8, indented, deterministic.
+pub(super) fn render(write: fn(&mut Writer<Vec<u8>>) -> io::Result<()>) -> String {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    write(&mut w).expect("writing to memory cannot fail");
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
+        .and_then(|_| write(&mut w))
+        .expect("writing to memory cannot fail");
     let mut text = String::from_utf8(w.into_inner()).expect("UTF-8");
     text.push('\n');
     text
 }
 
 fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
-    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-    let description =
-        "Linear SDOF structure carrying a stack of up to 8 rigid blocks that stick or slide with \
-                       Coulomb friction, under ground acceleration; exact stick/slip events";
-    let tool = format!("stacked-live-load {}", env!("CARGO_PKG_VERSION"));
+    let description = DESCRIPTION;
+    let tool = tool();
     let variables = table();
     w.create_element("fmiModelDescription")
         .with_attributes([
@@ -51,31 +86,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                 .write_empty()?;
             write_units(w)?;
             write_types(w)?;
-            w.create_element("LogCategories").write_inner_content(|w| {
-                for (name, text) in [
-                    (
-                        "logStatusError",
-                        "Errors: bad input, illegal calls, unreadable records",
-                    ),
-                    (
-                        "logStatusFatal",
-                        "Internal errors caught at the C interface",
-                    ),
-                    ("logAll", "Diagnostics, when debug logging is on"),
-                ] {
-                    w.create_element("Category")
-                        .with_attributes([("name", name), ("description", text)])
-                        .write_empty()?;
-                }
-                Ok(())
-            })?;
-            w.create_element("DefaultExperiment")
-                .with_attributes([
-                    ("startTime", "0.0"),
-                    ("stopTime", "20.0"),
-                    ("stepSize", "0.005"),
-                ])
-                .write_empty()?;
+            write_log_categories_and_experiment(w)?;
             w.create_element("ModelVariables")
                 .write_inner_content(|w| {
                     for v in &variables {
@@ -88,7 +99,23 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     Ok(())
 }
 
-fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+/// `LogCategories` and `DefaultExperiment` (both FMI versions).
+pub(super) fn write_log_categories_and_experiment(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+    w.create_element("LogCategories").write_inner_content(|w| {
+        for (name, text) in LOG_CATEGORIES {
+            w.create_element("Category")
+                .with_attributes([("name", name), ("description", text)])
+                .write_empty()?;
+        }
+        Ok(())
+    })?;
+    w.create_element("DefaultExperiment")
+        .with_attributes(DEFAULT_EXPERIMENT)
+        .write_empty()?;
+    Ok(())
+}
+
+pub(super) fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     w.create_element("UnitDefinitions")
         .write_inner_content(|w| {
             for &(name, kg, m, s) in UNITS {
@@ -133,14 +160,19 @@ fn write_types(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     Ok(())
 }
 
-fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
-    let kind = v.id.kind();
-    let (causality, variability) = match (v.id.causality(), kind) {
+/// `causality` and `variability` of a variable (both FMI versions).
+pub(super) fn causality_and_variability(id: Id) -> (&'static str, &'static str) {
+    match (id.causality(), id.kind()) {
         (Causality::Parameter, _) => ("parameter", "fixed"),
         (Causality::Input, _) => ("input", "continuous"),
-        (Causality::Output, Kind::Real) if v.id.is_continuous() => ("output", "continuous"),
+        (Causality::Output, Kind::Real) if id.is_continuous() => ("output", "continuous"),
         (Causality::Output, _) => ("output", "discrete"),
-    };
+    }
+}
+
+fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
+    let kind = v.id.kind();
+    let (causality, variability) = causality_and_variability(v.id);
     let vr = v.id.vr().to_string();
     w.create_element("ScalarVariable")
         .with_attributes([
@@ -164,12 +196,29 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
             if let Some(s) = &v.start {
                 attrs.push(("start", s.as_str()));
             }
+            let bounds = bounds(v.id);
+            attrs.extend(bounds.iter().map(|(k, x)| (*k, x.as_str())));
             w.create_element(element)
                 .with_attributes(attrs)
                 .write_empty()?;
             Ok(())
         })?;
     Ok(())
+}
+
+/// `min` and `max` of a variable with a range ([`Id::range`]), as written in
+/// the XML (integers without a decimal point).
+pub(super) fn bounds(id: Id) -> Vec<(&'static str, String)> {
+    let number = |x: f64| match id.kind() {
+        Kind::Real => format!("{x:?}"),
+        _ => format!("{}", x as i64),
+    };
+    let Some((lo, hi)) = id.range() else {
+        return vec![];
+    };
+    let mut out = vec![("min", number(lo))];
+    out.extend(hi.map(|hi| ("max", number(hi))));
+    out
 }
 
 /// Every output is listed in `Outputs` with the inputs it depends on at the

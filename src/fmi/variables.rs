@@ -2,7 +2,8 @@
 //! generated `modelDescription.xml` read. Names and value references are the
 //! public interface; value references are unique across all types.
 
-use crate::physics::params::{Params, MAX_BLOCKS};
+use crate::physics::params::{Params, MAX_BLOCKS, RANGES};
+use crate::physics::solver::SolverKind;
 
 /// What a variable is. Each variant is the FMU variable of the same name
 /// (see [`Id::name`]); indexed variants carry the block / interface number 1..=8.
@@ -254,6 +255,53 @@ impl Id {
         }
     }
 
+    /// The block / interface number of an indexed variable.
+    pub fn block(self) -> Option<usize> {
+        match self {
+            Id::Alpha(j)
+            | Id::Mus(j)
+            | Id::Muk(j)
+            | Id::Ub(j)
+            | Id::Vb(j)
+            | Id::Slip(j)
+            | Id::AbAbs(j)
+            | Id::F(j)
+            | Id::PeakSlip(j)
+            | Id::Stuck(j) => Some(j),
+            _ => None,
+        }
+    }
+
+    /// The range the FMU enforces on a parameter or input, as the model
+    /// description's `min` and `max` (both included): from the table the
+    /// checks use ([`RANGES`], [`crate::physics::params::MIN_MAX_STEP`], [`MAX_BLOCKS`], the solver
+    /// codes). An end the check excludes (`zeta < 1`) is the closest value
+    /// inside. `None` for outputs and strings.
+    pub fn range(self) -> Option<(f64, Option<f64>)> {
+        match self {
+            Id::NBlocks => return Some((0.0, Some(MAX_BLOCKS as f64))),
+            Id::Solver => {
+                let codes = || (1..10).filter(|&c| SolverKind::from_code(c).is_some());
+                let (lo, hi) = (codes().min()?, codes().max()?);
+                return Some((lo as f64, Some(hi as f64)));
+            }
+            // 0 (automatic) or at least MIN_MAX_STEP: min is 0.
+            Id::MaxStep => return Some((0.0, None)),
+            _ if self.kind() != Kind::Real || self.causality() == Causality::Output => return None,
+            _ => {}
+        }
+        let name = self.name();
+        let base = name.split('[').next().unwrap_or(&name);
+        let &(_, lo, hi, _) = RANGES.iter().find(|r| r.0 == base)?;
+        // check_scalar excludes zeta = 1 (critical damping).
+        let hi = if base == "zeta" {
+            f64::from_bits(hi.to_bits() - 1)
+        } else {
+            hi
+        };
+        Some((lo, Some(hi)))
+    }
+
     /// Whether the variable varies continuously in time (Real inputs and
     /// Real outputs but `tSwitch`, which changes at communication points only).
     pub fn is_continuous(self) -> bool {
@@ -308,11 +356,16 @@ fn real(v: f64) -> Option<String> {
 pub fn table() -> Vec<Variable> {
     let d = Params::default();
     let mut t = vec![];
+    // `{j}` in a description is the block / interface number of the variable.
     let mut add = |id: Id, ty: Option<&'static str>, start: Option<String>, desc: &str| {
+        let description = match id.block() {
+            Some(j) => desc.replace("{j}", &j.to_string()),
+            None => desc.to_string(),
+        };
         t.push(Variable {
             id,
             name: id.name(),
-            description: desc.to_string(),
+            description,
             declared_type: ty,
             start,
         })
@@ -352,7 +405,7 @@ pub fn table() -> Vec<Variable> {
             Id::Alpha(j),
             Some("Ratio"),
             real(d.alpha[j - 1]),
-            "Mass of block j over mp",
+            "Mass of block {j} over mp",
         );
     }
     for j in 1..=MAX_BLOCKS {
@@ -360,7 +413,7 @@ pub fn table() -> Vec<Variable> {
             Id::Mus(j),
             Some("Ratio"),
             real(d.mus[j - 1]),
-            "Static friction coefficient of interface j (below block j)",
+            "Static friction coefficient of interface {j} (below block {j})",
         );
     }
     for j in 1..=MAX_BLOCKS {
@@ -368,7 +421,7 @@ pub fn table() -> Vec<Variable> {
             Id::Muk(j),
             Some("Ratio"),
             real(d.muk[j - 1]),
-            "Kinetic friction coefficient of interface j, <= mus[j]",
+            "Kinetic friction coefficient of interface {j}, <= mus[{j}]",
         );
     }
     add(Id::RecordFile, None, Some(String::new()), "Ground-motion file (PEER .AT2 in g, or CSV time,accel in m/s2), absolute or relative to the resources folder; empty: none");
@@ -436,24 +489,28 @@ pub fn table() -> Vec<Variable> {
         (
             Id::Ub,
             "Displacement",
-            "Block j displacement relative to the support",
+            "Block {j} displacement relative to the support",
         ),
         (
             Id::Vb,
             "Velocity",
-            "Block j velocity relative to the support",
+            "Block {j} velocity relative to the support",
         ),
         (
             Id::Slip,
             "Displacement",
-            "Block j displacement relative to the body below",
+            "Block {j} displacement relative to the body below",
         ),
-        (Id::AbAbs, "Acceleration", "Block j absolute acceleration"),
-        (Id::F, "Force", "Friction force of interface j on block j"),
+        (Id::AbAbs, "Acceleration", "Block {j} absolute acceleration"),
+        (
+            Id::F,
+            "Force",
+            "Friction force of interface {j} on block {j}",
+        ),
         (
             Id::PeakSlip,
             "Displacement",
-            "Largest |slip[j]| since the start",
+            "Largest |slip[{j}]| since the start",
         ),
     ];
     for (make, ty, desc) in per_block {
@@ -462,7 +519,7 @@ pub fn table() -> Vec<Variable> {
         }
     }
     for j in 1..=MAX_BLOCKS {
-        add(Id::Stuck(j), None, None, "Interface j is stuck");
+        add(Id::Stuck(j), None, None, "Interface {j} is stuck");
     }
     add(
         Id::PeakUp,
@@ -545,5 +602,42 @@ mod tests {
         let names: std::collections::HashSet<_> = t.iter().map(|v| v.name.as_str()).collect();
         assert_eq!(names.len(), t.len());
         assert_eq!(Id::Alpha(2).name(), "alpha[2]");
+    }
+
+    #[test]
+    fn declared_ranges_are_the_checked_ones() {
+        use crate::physics::params::check_scalar;
+        let mut with_range = 0;
+        for v in table() {
+            let Some((lo, hi)) = v.id.range() else {
+                continue;
+            };
+            with_range += 1;
+            if v.id.kind() == Kind::Real {
+                // Both ends are accepted, just outside them is refused.
+                assert!(check_scalar(&v.name, lo).is_ok(), "{} min", v.name);
+                assert!(
+                    check_scalar(&v.name, lo - 1e-3 * lo.abs().max(1e-3)).is_err(),
+                    "{}",
+                    v.name
+                );
+                if let Some(hi) = hi {
+                    assert!(check_scalar(&v.name, hi).is_ok(), "{} max", v.name);
+                    assert!(
+                        check_scalar(&v.name, hi * (1.0 + 1e-9) + 1e-12).is_err(),
+                        "{}",
+                        v.name
+                    );
+                }
+            }
+        }
+        // Every parameter and input but recordFile has a range.
+        let settable = table()
+            .iter()
+            .filter(|v| v.id.causality() != Causality::Output && v.id.kind() != Kind::String)
+            .count();
+        assert_eq!(with_range, settable);
+        assert_eq!(Id::NBlocks.range(), Some((0.0, Some(8.0))));
+        assert_eq!(Id::Solver.range(), Some((1.0, Some(3.0))));
     }
 }

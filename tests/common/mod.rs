@@ -82,6 +82,8 @@ pub struct ExactResult {
     pub u: Vec<f64>,
     pub v: Vec<f64>,
     pub events: usize,
+    /// The time of every event (s, record time), in order.
+    pub event_times: Vec<f64>,
     /// u0 at every record sample.
     pub u0_history: Vec<f64>,
 }
@@ -262,6 +264,7 @@ impl Exact {
             u: vec![],
             v: vec![],
             events: 0,
+            event_times: vec![],
             u0_history: vec![0.0],
         };
         let mut cache: Option<(Mode, f64, DMatrix<f64>, DMatrix<f64>)> = None;
@@ -269,8 +272,8 @@ impl Exact {
         let mut offsets = vec![0.0; m];
         let mut t_a = t_start;
         for piece in pieces {
+            // This piece runs from t_a (the previous one's end) to its end.
             let len = piece.t_end - t_a;
-            t_a = piece.t_end;
             let (a_a, slope) = (piece.ag, piece.ag_rate);
             z[2 * m + 1] = a_a;
             z[2 * m + 2] = slope;
@@ -289,6 +292,7 @@ impl Exact {
             }
             if len <= 0.0 {
                 res.u0_history.push(z[0]);
+                t_a = piece.t_end;
                 continue;
             }
             let mut tau = 0.0;
@@ -368,12 +372,14 @@ impl Exact {
                             }
                         }
                         res.events += 1;
+                        res.event_times.push(t_a + tau);
                         let abs_u0 = z[0].abs();
                         res.peak_u0 = res.peak_u0.max(abs_u0);
                     }
                 }
             }
             res.u0_history.push(z[0]);
+            t_a = piece.t_end;
         }
         res.u = (0..m).map(|i| z[i]).collect();
         res.v = (0..m).map(|i| z[m + i]).collect();

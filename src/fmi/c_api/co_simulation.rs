@@ -77,6 +77,7 @@ pub unsafe extern "C" fn fmi2GetStatus(
 ) -> fmi2Status {
     const F: &str = "fmi2GetStatus";
     with(c, F, |comp| match (s, value.is_null()) {
+        _ if comp.instance.check_call(F).is_err() => Status::Error,
         (0, false) => {
             *value = OK; // fmi2DoStepStatus: every step finishes synchronously
             Status::Ok
@@ -96,6 +97,7 @@ pub unsafe extern "C" fn fmi2GetRealStatus(
 ) -> fmi2Status {
     const F: &str = "fmi2GetRealStatus";
     with(c, F, |comp| match (s, value.is_null()) {
+        _ if comp.instance.check_call(F).is_err() => Status::Error,
         (2, false) => {
             *value = comp.instance.last_successful_time();
             Status::Ok
@@ -115,6 +117,9 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
 ) -> fmi2Status {
     const F: &str = "fmi2GetIntegerStatus";
     with(c, F, |comp| {
+        if let Err(status) = comp.instance.check_call(F) {
+            return status;
+        }
         comp.instance
             .error(F, format!("status kind {s} is not provided"))
     })
@@ -129,6 +134,7 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
 ) -> fmi2Status {
     const F: &str = "fmi2GetBooleanStatus";
     with(c, F, |comp| match (s, value.is_null()) {
+        _ if comp.instance.check_call(F).is_err() => Status::Error,
         (3, false) => {
             *value = 0; // fmi2Terminated: the FMU never asks to stop
             Status::Ok
@@ -148,6 +154,9 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 ) -> fmi2Status {
     const F: &str = "fmi2GetStringStatus";
     with(c, F, |comp| {
+        if let Err(status) = comp.instance.check_call(F) {
+            return status;
+        }
         comp.instance
             .error(F, format!("status kind {s} is not provided"))
     })

@@ -62,12 +62,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
             );
             return std::ptr::null_mut();
         }
-        let guid = string_arg(fmuGUID).unwrap_or_default();
-        if guid != GUID {
-            instance.error(
-                F,
-                format!("fmuGUID {guid} does not match this FMU's {GUID}"),
-            );
+        if !token_matches(&mut instance, F, fmuGUID) {
             return std::ptr::null_mut();
         }
         Box::into_raw(Box::new(Component {

@@ -205,7 +205,59 @@ unsafe fn string_arg(s: fmi2String) -> Option<String> {
     (!s.is_null()).then(|| CStr::from_ptr(s).to_string_lossy().into_owned())
 }
 
-// The exports in four files, declared in the standard's order (the header keeps it).
+/// Checks the importer's GUID (FMI 2.0) or instantiation token (FMI 3.0)
+/// against this FMU's, logging the mismatch.
+unsafe fn token_matches(instance: &mut Instance, func: &str, token: *const c_char) -> bool {
+    let token = string_arg(token).unwrap_or_default();
+    if token != GUID {
+        instance.error(
+            func,
+            format!("the GUID / instantiation token {token} does not match this FMU's {GUID}"),
+        );
+    }
+    token == GUID
+}
+
+/// fmi2GetString and fmi3GetString: the strings stay valid until the next
+/// call on the instance, as FMI allows.
+unsafe fn get_strings(
+    comp: &mut Component,
+    func: &str,
+    vr: &[u32],
+    value: *mut *const c_char,
+) -> Status {
+    let Some(value) = slice_mut(value, vr.len()) else {
+        return null_argument(&mut comp.instance, func);
+    };
+    match comp.instance.get_string(vr) {
+        Ok(strings) => {
+            comp.strings = strings.iter().map(|s| c_text(s)).collect();
+            for (slot, s) in value.iter_mut().zip(&comp.strings) {
+                *slot = s.as_ptr();
+            }
+            Status::Ok
+        }
+        Err(status) => status,
+    }
+}
+
+/// fmi2SetString and fmi3SetString.
+unsafe fn set_strings(
+    comp: &mut Component,
+    func: &str,
+    vr: &[u32],
+    value: *const *const c_char,
+) -> Status {
+    let strings: Option<Vec<String>> =
+        slice(value, vr.len()).and_then(|v| v.iter().map(|&s| string_arg(s)).collect());
+    match strings {
+        Some(strings) => comp.instance.set_string(vr, &strings),
+        None => null_argument(&mut comp.instance, func),
+    }
+}
+
+// The FMI 2.0 exports in four files, declared in the standard's order (the
+// header keeps it), and the Model Exchange ones, which are not provided.
 mod lifecycle;
 
 mod values;
@@ -214,9 +266,14 @@ mod fmu_state;
 
 mod co_simulation;
 
+mod model_exchange;
+
+pub mod fmi3;
+
 pub use co_simulation::*;
 pub use fmu_state::*;
 pub use lifecycle::*;
+pub use model_exchange::*;
 pub use values::*;
 
 #[cfg(test)]

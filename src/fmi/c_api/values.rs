@@ -101,19 +101,9 @@ pub unsafe extern "C" fn fmi2GetString(
     value: *mut fmi2String,
 ) -> fmi2Status {
     const F: &str = "fmi2GetString";
-    with(c, F, |comp| match (slice(vr, nvr), slice_mut(value, nvr)) {
-        (Some(vr), Some(value)) => match comp.instance.get_string(vr) {
-            Ok(strings) => {
-                // Valid until the next call on this instance, as FMI 2.0 allows.
-                comp.strings = strings.iter().map(|s| c_text(s)).collect();
-                for (slot, s) in value.iter_mut().zip(&comp.strings) {
-                    *slot = s.as_ptr();
-                }
-                Status::Ok
-            }
-            Err(status) => status,
-        },
-        _ => null_argument(&mut comp.instance, F),
+    with(c, F, |comp| match slice(vr, nvr) {
+        Some(vr) => get_strings(comp, F, vr, value),
+        None => null_argument(&mut comp.instance, F),
     })
 }
 
@@ -126,14 +116,8 @@ pub unsafe extern "C" fn fmi2SetString(
     value: *const fmi2String,
 ) -> fmi2Status {
     const F: &str = "fmi2SetString";
-    with(c, F, |comp| match (slice(vr, nvr), slice(value, nvr)) {
-        (Some(vr), Some(value)) => {
-            let strings: Option<Vec<String>> = value.iter().map(|&s| string_arg(s)).collect();
-            match strings {
-                Some(strings) => comp.instance.set_string(vr, &strings),
-                None => null_argument(&mut comp.instance, F),
-            }
-        }
-        _ => null_argument(&mut comp.instance, F),
+    with(c, F, |comp| match slice(vr, nvr) {
+        Some(vr) => set_strings(comp, F, vr, value),
+        None => null_argument(&mut comp.instance, F),
     })
 }

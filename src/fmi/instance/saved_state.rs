@@ -81,7 +81,7 @@ pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
         check_scalar(name, x).map_err(|e| format!("saved value {e}"))?;
     }
     let Some(sim) = &d.sim else {
-        if d.phase == Phase::StepComplete {
+        if matches!(d.phase, Phase::StepComplete | Phase::EventMode) {
             return Err("a saved state ready to step has no simulator".into());
         }
         // Before initialization the simulator's clock has not started.
@@ -123,31 +123,14 @@ pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
 impl Instance {
     /// fmi2GetFMUstate.
     pub fn save(&mut self) -> Result<SavedState, Status> {
-        self.require(
-            "fmi2GetFMUstate",
-            &[
-                Phase::Instantiated,
-                Phase::InitializationMode,
-                Phase::StepComplete,
-                Phase::Terminated,
-            ],
-        )?;
+        self.require("fmi2GetFMUstate")?;
         Ok(SavedState(self.d.clone()))
     }
 
     /// fmi2SetFMUstate (re-reads the record if the state names another).
     pub fn restore(&mut self, state: &SavedState) -> Status {
         const F: &str = "fmi2SetFMUstate";
-        if let Err(s) = self.require(
-            F,
-            &[
-                Phase::Instantiated,
-                Phase::InitializationMode,
-                Phase::StepComplete,
-                Phase::Terminated,
-                Phase::Error,
-            ],
-        ) {
+        if let Err(s) = self.require(F) {
             return s;
         }
         self.d = state.0.clone();
@@ -211,6 +194,7 @@ impl Instance {
             2 => Phase::StepComplete,
             3 => Phase::Terminated,
             4 => Phase::Error,
+            5 => Phase::EventMode,
             x => return Err(format!("unknown phase {x}")),
         };
         let (start_time, stop, time) = (r.f64()?, r.f64()?, r.f64()?);

@@ -29,10 +29,7 @@ impl Instance {
             Causality::Parameter => {
                 matches!(phase, Phase::Instantiated | Phase::InitializationMode)
             }
-            Causality::Input => matches!(
-                phase,
-                Phase::Instantiated | Phase::InitializationMode | Phase::StepComplete
-            ),
+            Causality::Input => super::state_table::legal(func, phase),
             Causality::Output => {
                 return Err(self.error(
                     func,
@@ -178,15 +175,7 @@ impl Instance {
     }
 
     fn readable(&mut self, func: &str) -> Result<(), Status> {
-        self.require(
-            func,
-            &[
-                Phase::InitializationMode,
-                Phase::StepComplete,
-                Phase::Terminated,
-                Phase::Error,
-            ],
-        )
+        self.require(func)
     }
 
     /// fmi2GetReal.

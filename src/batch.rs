@@ -15,22 +15,60 @@ use crate::physics::params::{check_scalar, Params, Settings, MAX_BLOCKS};
 use crate::{SimError, Simulator};
 use std::ffi::{c_char, c_int, CStr};
 
-/// Doubles per parameter set: `nBlocks` (an integer 0..8), `mp`, `Tp`,
-/// `zeta`, then `alpha[1..8]`, `mus[1..8]`, `muk[1..8]` (entries beyond
-/// `nBlocks` are ignored).
-pub const BATCH_PARAMS: usize = 4 + 3 * MAX_BLOCKS;
-/// Doubles per result: `peakUp`, `peakApAbs`, `Einput`, `nEvents`,
-/// `nAmbiguous`, then `peakSlip[1..8]` (0 beyond `nBlocks`).
-pub const BATCH_OUTPUTS: usize = 5 + MAX_BLOCKS;
+/// One parameter set (all doubles, in this order: the C layout is 28
+/// consecutive doubles). Entries beyond `nBlocks` are ignored.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SllBatchParams {
+    /// Blocks in the stack: an integer 0..8.
+    pub nBlocks: f64,
+    /// Structure mass (kg).
+    pub mp: f64,
+    /// Bare period (s).
+    pub Tp: f64,
+    /// Damping ratio.
+    pub zeta: f64,
+    /// Block mass / mp, blocks 1..8.
+    pub alpha: [f64; 8],
+    /// Static friction of interfaces 1..8.
+    pub mus: [f64; 8],
+    /// Kinetic friction of interfaces 1..8.
+    pub muk: [f64; 8],
+}
+
+/// The results of one set (13 consecutive doubles in C).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SllBatchOutputs {
+    /// Largest |up| (m).
+    pub peakUp: f64,
+    /// Largest |apAbs| (m/s²).
+    pub peakApAbs: f64,
+    /// Input energy at the end (J).
+    pub Einput: f64,
+    /// Stick/slip switches.
+    pub nEvents: f64,
+    /// Switches decided by the selection rule.
+    pub nAmbiguous: f64,
+    /// Largest |slip[j]|, interfaces 1..8 (0 beyond nBlocks).
+    pub peakSlip: [f64; 8],
+}
+
+/// Doubles per parameter set (the Python side, `scripts/sll`, passes flat
+/// arrays of this layout).
+pub const BATCH_PARAMS: usize = std::mem::size_of::<SllBatchParams>() / 8;
+/// Doubles per result.
+pub const BATCH_OUTPUTS: usize = std::mem::size_of::<SllBatchOutputs>() / 8;
+// The arrays are 8 long in C (the header has no MAX_BLOCKS).
+const _: () = assert!(MAX_BLOCKS == 8 && BATCH_PARAMS == 28 && BATCH_OUTPUTS == 13);
 
 /// Runs `nSets` parameter sets over one record.
 ///
 /// - `recordFile`: a PEER `.AT2` (in g, converted with `g`) or CSV
 ///   `time,accel` (m/s²) file, as the FMU's `recordFile` (an absolute or
 ///   working-directory-relative path); multiplied by `recordScale`.
-/// - `params`: `nSets` × 28 doubles per set: nBlocks, mp, Tp, zeta, alpha[1..8], mus[1..8], muk[1..8].
-/// - `outputs`: room for `nSets` × 13 doubles: peakUp, peakApAbs, Einput, nEvents, nAmbiguous,
-///   peakSlip[1..8].
+/// - `params`: `nSets` parameter sets ([`SllBatchParams`]).
+/// - `outputs`: room for `nSets` results ([`SllBatchOutputs`]).
 /// - `message`, `messageSize`: a buffer for the error message (may be NULL).
 ///
 /// Returns 0 (fmi2OK), or 3 (fmi2Error) with a message naming the set and
@@ -46,8 +84,8 @@ pub unsafe extern "C" fn sllRunBatch(
     g: f64,
     recordScale: f64,
     nSets: c_int,
-    params: *const f64,
-    outputs: *mut f64,
+    params: *const SllBatchParams,
+    outputs: *mut SllBatchOutputs,
     message: *mut c_char,
     messageSize: usize,
 ) -> c_int {
@@ -65,12 +103,12 @@ pub unsafe extern "C" fn sllRunBatch(
         let gm = GroundMotion::read(std::path::Path::new(&path), g)
             .map_err(|e| format!("recordFile: {e}"))?;
         let n = nSets as usize;
-        let params = std::slice::from_raw_parts(params, n * BATCH_PARAMS);
-        let outputs = std::slice::from_raw_parts_mut(outputs, n * BATCH_OUTPUTS);
+        let params = std::slice::from_raw_parts(params, n);
+        let outputs = std::slice::from_raw_parts_mut(outputs, n);
         // The work bound of one call, up front: every set's internal steps
         // over the record and its samples, and building it.
         let mut estimate = 0.0;
-        for (set, p) in params.chunks_exact(BATCH_PARAMS).enumerate() {
+        for (set, p) in params.iter().enumerate() {
             let sim = simulator(p, g).map_err(|e| format!("set {set}: {e}"))?;
             let steps =
                 limits::work_estimate(gm.duration(), sim.max_internal_step(), gm.time.len(), 1.0);
@@ -90,11 +128,7 @@ pub unsafe extern "C" fn sllRunBatch(
         }
         // And as it is done (switches count too): what is left of it.
         let mut left = limits::MAX_STEPS_PER_CALL as u64;
-        for (set, (p, out)) in params
-            .chunks_exact(BATCH_PARAMS)
-            .zip(outputs.chunks_exact_mut(BATCH_OUTPUTS))
-            .enumerate()
-        {
+        for (set, (p, out)) in params.iter().zip(outputs.iter_mut()).enumerate() {
             run_set(p, g, &gm, recordScale, out, &mut left)
                 .map_err(|e| format!("set {set}: {e}"))?;
         }
@@ -119,36 +153,37 @@ pub unsafe extern "C" fn sllRunBatch(
 const SET_WORK: f64 = 64.0;
 
 /// The simulator of one parameter set.
-fn simulator(p: &[f64], g: f64) -> Result<Simulator, String> {
-    let n = p[0];
+fn simulator(p: &SllBatchParams, g: f64) -> Result<Simulator, String> {
+    let n = p.nBlocks;
     if !(n.fract() == 0.0 && (0.0..=MAX_BLOCKS as f64).contains(&n)) {
         return Err(format!(
             "nBlocks = {n} is not allowed: it must be an integer from 0 to 8"
         ));
     }
-    let b = MAX_BLOCKS;
+    // Entries beyond nBlocks are ignored (the default scene's values stand).
+    let b = n as usize;
     let mut params = Params {
-        n_blocks: n as usize,
-        mp: p[1],
-        tp: p[2],
-        zeta: p[3],
+        n_blocks: b,
+        mp: p.mp,
+        tp: p.Tp,
+        zeta: p.zeta,
         g,
         ..Params::default()
     };
-    params.alpha.copy_from_slice(&p[4..4 + b]);
-    params.mus.copy_from_slice(&p[4 + b..4 + 2 * b]);
-    params.muk.copy_from_slice(&p[4 + 2 * b..4 + 3 * b]);
+    params.alpha[..b].copy_from_slice(&p.alpha[..b]);
+    params.mus[..b].copy_from_slice(&p.mus[..b]);
+    params.muk[..b].copy_from_slice(&p.muk[..b]);
     Simulator::new(&params, &Settings::default()).map_err(|e| e.to_string())
 }
 
 /// One parameter set over the record, within `left` units of work (what
 /// it does is taken from `left`).
 fn run_set(
-    p: &[f64],
+    p: &SllBatchParams,
     g: f64,
     gm: &GroundMotion,
     scale: f64,
-    out: &mut [f64],
+    out: &mut SllBatchOutputs,
     left: &mut u64,
 ) -> Result<(), String> {
     let mut sim = simulator(p, g)?;
@@ -169,14 +204,14 @@ fn run_set(
         Err(e) => return Err(e.to_string()),
     }
     let o = sim.outputs();
-    out[..5].copy_from_slice(&[
-        o.peak_up,
-        o.peak_ap_abs,
-        o.e_input,
-        o.n_events as f64,
-        o.n_ambiguous as f64,
-    ]);
-    out[5..].copy_from_slice(&o.peak_slip);
+    *out = SllBatchOutputs {
+        peakUp: o.peak_up,
+        peakApAbs: o.peak_ap_abs,
+        Einput: o.e_input,
+        nEvents: o.n_events as f64,
+        nAmbiguous: o.n_ambiguous as f64,
+        peakSlip: o.peak_slip,
+    };
     Ok(())
 }
 
@@ -203,16 +238,22 @@ mod tests {
         let read = GroundMotion::read(&file, 9.81).unwrap();
         let mut sets = Vec::new();
         for (n, tp) in [(0usize, 0.3), (2, 0.5), (3, 1.2)] {
-            let mut p = vec![n as f64, 1000.0, tp, 0.05];
-            p.extend([0.2; 8]);
-            p.extend([0.1; 8]);
-            p.extend([0.08; 8]);
-            sets.extend(p);
+            sets.push(SllBatchParams {
+                nBlocks: n as f64,
+                mp: 1000.0,
+                Tp: tp,
+                zeta: 0.05,
+                alpha: [0.2; 8],
+                mus: [0.1; 8],
+                muk: [0.08; 8],
+            });
         }
-        let mut out = vec![0.0; 3 * BATCH_OUTPUTS];
+        let mut out = vec![SllBatchOutputs::default(); 3];
         let path = CString::new(file.to_str().unwrap()).unwrap();
         let mut msg = [0 as c_char; 200];
-        let run = |sets: &[f64], out: &mut [f64], msg: &mut [c_char; 200]| unsafe {
+        let run = |sets: &[SllBatchParams],
+                   out: &mut [SllBatchOutputs],
+                   msg: &mut [c_char; 200]| unsafe {
             sllRunBatch(
                 path.as_ptr(),
                 9.81,
@@ -226,14 +267,14 @@ mod tests {
         };
         let status = run(&sets, &mut out, &mut msg);
         assert_eq!(status, 0);
-        for (k, p) in sets.chunks(BATCH_PARAMS).enumerate() {
-            let mut want = vec![0.0; BATCH_OUTPUTS];
+        for (p, got) in sets.iter().zip(&out) {
+            let mut want = SllBatchOutputs::default();
             run_set(p, 9.81, &read, 1.0, &mut want, &mut { u64::MAX }).unwrap();
-            assert_eq!(&out[k * BATCH_OUTPUTS..(k + 1) * BATCH_OUTPUTS], &want[..]);
+            assert_eq!(got, &want);
         }
-        assert!(out[BATCH_OUTPUTS + 3] > 0.0, "the 2-block set switches");
+        assert!(out[1].nEvents > 0.0, "the 2-block set switches");
         // A bad set is named with its variable.
-        sets[BATCH_PARAMS + 2] = -1.0;
+        sets[1].Tp = -1.0;
         let status = run(&sets, &mut out, &mut msg);
         let text = unsafe { CStr::from_ptr(msg.as_ptr()) }.to_string_lossy();
         assert_eq!(status, 3);
