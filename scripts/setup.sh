@@ -22,7 +22,8 @@ fi
 # tests say they were skipped and why.
 if [ "${SLL_CROSS:-1}" != 0 ]; then
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo -n"
-  rustup target add x86_64-pc-windows-gnu aarch64-unknown-linux-gnu >/dev/null 2>&1 \
+  # Bounded in time: a registry that does not answer must not stall the tests.
+  timeout 300 rustup target add x86_64-pc-windows-gnu aarch64-unknown-linux-gnu >/dev/null 2>&1 \
     || echo "setup: rustup could not add the cross targets; the FMUs will carry fewer platforms" >&2
   need=()
   command -v x86_64-w64-mingw32-gcc >/dev/null || need+=(gcc-mingw-w64-x86-64)
@@ -30,7 +31,7 @@ if [ "${SLL_CROSS:-1}" != 0 ]; then
   command -v qemu-aarch64 >/dev/null || need+=(qemu-user)
   { [ -x /usr/lib/wine/wine64 ] || command -v wine64 >/dev/null; } || need+=(wine64)
   if [ ${#need[@]} -gt 0 ]; then
-    { $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq \
+    { timeout 300 $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive timeout 900 $SUDO apt-get install -y -qq \
         --no-install-recommends "${need[@]}"; } >/dev/null 2>&1 \
       || echo "setup: could not install ${need[*]}; those platforms are left out or not tested" >&2
   fi
