@@ -51,6 +51,29 @@ impl Excitation {
     }
 }
 
+/// A source of consecutive linear pieces of excitation, each given by its
+/// end time and its excitation (values at its start), with a flag from the
+/// source: `true` promises that the piece continues the source's previous
+/// one as a record's next sample does (as long as it up to the rounding of
+/// the times, 1e-15 relative, `Fext` constant, every value finite), so that
+/// the driver keeps its substeps without checking it again. Any iterator of
+/// pieces is a source through [`Plain`] (never a promise: every piece
+/// checked).
+pub trait PieceSource {
+    /// The next piece, or `None` at the end.
+    fn next_piece(&mut self) -> Option<(f64, Excitation, bool)>;
+}
+
+/// An iterator of pieces as a [`PieceSource`] that promises nothing.
+pub struct Plain<I>(pub I);
+
+impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for Plain<I> {
+    #[inline(always)]
+    fn next_piece(&mut self) -> Option<(f64, Excitation, bool)> {
+        self.0.next().map(|(t, e)| (t, e, false))
+    }
+}
+
 /// One linear piece of excitation from `t_ref` to `t_end`, cut into `n`
 /// equal substeps of `h`; `i` is the next substep to take (1-based).
 #[derive(Clone, Copy, Debug)]

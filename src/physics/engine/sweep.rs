@@ -26,7 +26,7 @@ use super::exact_events::raise_substep_peaks;
 use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
 use super::proofs::{in_band_proved, raise_peak_proved, slip_guard_proved, structure_peaks_proved};
-use super::{move_bodies, Excitation, Piece, Simulator};
+use super::{move_bodies, Excitation, Piece, PieceSource, Simulator};
 use crate::physics::hermite;
 use crate::physics::params::MAX_BODIES;
 
@@ -155,7 +155,7 @@ impl Simulator {
     pub(super) fn sweep(
         &mut self,
         piece: &mut Piece,
-        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+        pieces: &mut impl PieceSource,
     ) -> Option<(f64, Excitation)> {
         match self.dynamics.n_clusters {
             1 => self.sweep_clusters::<1>(piece, pieces),
@@ -176,7 +176,7 @@ impl Simulator {
     fn sweep_clusters<const NC: usize>(
         &mut self,
         piece: &mut Piece,
-        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+        pieces: &mut impl PieceSource,
     ) -> Option<(f64, Excitation)> {
         let h_max = self.h_max;
         let (sys, d, maps) = (&self.sys, &self.dynamics, &mut self.maps);
@@ -232,9 +232,21 @@ impl Simulator {
 
         'steps: loop {
             if cur.i > cur.n {
-                let Some((t_end, exc)) = pieces.next() else {
+                let Some((t_end, exc, continues)) = pieces.next_piece() else {
                     break;
                 };
+                if continues {
+                    // The source's promise: a record's next sample, as long
+                    // as the last, Fext constant, every value finite.
+                    (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
+                    inp = Inputs {
+                        ag: exc.ag,
+                        fext: exc.fext,
+                        ag_rate: exc.ag_rate,
+                        fext_rate: exc.fext_rate,
+                    };
+                    continue;
+                }
                 // A jump of Fext, or a bad value: the piece is begun anew.
                 if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() {
                     pending = Some((t_end, exc));
