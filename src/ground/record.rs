@@ -239,7 +239,7 @@ impl RecordPieces<'_> {
     /// or a whole one that `t_end` cuts.
     #[cold]
     #[inline(never)]
-    fn partial(&mut self) -> Option<(f64, Excitation, bool)> {
+    fn partial(&mut self) -> Option<(f64, Excitation)> {
         if self.done || (self.yielded && self.t >= self.t_end) {
             return None;
         }
@@ -258,7 +258,7 @@ impl RecordPieces<'_> {
         self.last_whole = false;
         self.yielded = true;
         self.align();
-        Some((t1, exc, false))
+        Some((t1, exc))
     }
 }
 
@@ -270,15 +270,43 @@ fn pair(x: &[f64], i: usize) -> [f64; 2] {
 }
 
 impl PieceSource for RecordPieces<'_> {
-    #[inline(always)]
-    fn next_piece(&mut self) -> Option<(f64, Excitation, bool)> {
+    #[inline]
+    fn next_piece(&mut self) -> Option<(f64, Excitation)> {
         let i = self.next_sample;
         if i >= self.stop {
             return self.partial();
         }
-        // A whole sample interval from its first sample, ending at or
-        // before `t_end` (the usual case): `piece` without its cuts.
         let (a, slope, uniform) = self.whole(i);
+        self.last_whole = uniform & self.promise;
+        let (t1, exc) = self.lean(i, a, slope);
+        (self.t, self.next_sample) = (t1, i + 1);
+        Some((t1, exc))
+    }
+
+    #[inline(always)]
+    fn next_continuing(&mut self) -> Option<(f64, Excitation)> {
+        let i = self.next_sample;
+        if i >= self.stop || !self.last_whole {
+            return None;
+        }
+        // A whole sample interval from its first sample, ending at or
+        // before `t_end`, as long as the last (the usual case).
+        let (a, slope, uniform) = self.whole(i);
+        let (t1, exc) = self.lean(i, a, slope);
+        // As `Excitation::check` (Fext is finite by the promise).
+        if !(uniform && (exc.ag + exc.ag_rate + t1).is_finite()) {
+            return None;
+        }
+        (self.t, self.next_sample) = (t1, i + 1);
+        Some((t1, exc))
+    }
+}
+
+impl RecordPieces<'_> {
+    /// The whole interval that ends at sample `i <= t_end` (from `self.t`,
+    /// its start): `piece` without its cuts, and without moving on.
+    #[inline(always)]
+    fn lean(&self, i: usize, a: f64, slope: f64) -> (f64, Excitation) {
         let t1 = pair(self.time, i)[1];
         let (e, dt) = (&self.extra, self.t - self.t_start);
         let exc = Excitation {
@@ -287,11 +315,7 @@ impl PieceSource for RecordPieces<'_> {
             fext: e.fext + e.fext_rate * dt,
             fext_rate: e.fext_rate,
         };
-        self.t = t1;
-        self.next_sample = i + 1;
-        let continues = uniform & self.last_whole & (exc.ag + exc.ag_rate + t1).is_finite();
-        self.last_whole = uniform & self.promise;
-        Some((t1, exc, continues))
+        (t1, exc)
     }
 }
 

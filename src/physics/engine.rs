@@ -287,7 +287,7 @@ impl Simulator {
     /// [`Simulator::advance_pieces`] from a [`PieceSource`] (a record's
     /// samples promise the pieces that continue the previous one).
     pub fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
-        let mut pending = pieces.next_piece().map(|(t, e, _)| (t, e));
+        let mut pending = pieces.next_piece();
         while let Some((t_end, exc)) = pending.take() {
             let mut piece = self.begin_piece(t_end, &exc)?;
             match self.settings.method {
@@ -308,7 +308,7 @@ impl Simulator {
                         self.step_switch_at_end(piece.end_of(i), &exc, piece.t_ref);
                         self.check_work()?;
                     }
-                    pending = pieces.next_piece().map(|(t, e, _)| (t, e));
+                    pending = pieces.next_piece();
                 }
             }
             self.end_piece(&piece);

@@ -29,7 +29,7 @@ pub trait Stepper {
 
     /// The same from a [`PieceSource`].
     fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
-        while let Some((t_end, exc, _)) = pieces.next_piece() {
+        while let Some((t_end, exc)) = pieces.next_piece() {
             self.advance(t_end, &exc)?;
         }
         Ok(())

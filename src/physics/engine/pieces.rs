@@ -52,16 +52,22 @@ impl Excitation {
 }
 
 /// A source of consecutive linear pieces of excitation, each given by its
-/// end time and its excitation (values at its start), with a flag from the
-/// source: `true` promises that the piece continues the source's previous
-/// one as a record's next sample does (as long as it up to the rounding of
-/// the times, 1e-15 relative, `Fext` constant, every value finite), so that
-/// the driver keeps its substeps without checking it again. Any iterator of
-/// pieces is a source through [`Plain`] (never a promise: every piece
-/// checked).
+/// end time and its excitation (values at its start). Any iterator of
+/// pieces is a source through [`Plain`].
 pub trait PieceSource {
     /// The next piece, or `None` at the end.
-    fn next_piece(&mut self) -> Option<(f64, Excitation, bool)>;
+    fn next_piece(&mut self) -> Option<(f64, Excitation)>;
+
+    /// The next piece only where the source promises that it continues its
+    /// previous one as a record's next sample does (as long as it up to the
+    /// rounding of the times, 1e-15 relative, `Fext` constant, every value
+    /// finite): the driver then keeps its substeps without checking it
+    /// again. `None` takes nothing (the driver asks `next_piece`). A lean
+    /// method of its own, so that the common piece is built in registers.
+    #[inline(always)]
+    fn next_continuing(&mut self) -> Option<(f64, Excitation)> {
+        None
+    }
 }
 
 /// An iterator of pieces as a [`PieceSource`] that promises nothing.
@@ -69,8 +75,8 @@ pub struct Plain<I>(pub I);
 
 impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for Plain<I> {
     #[inline(always)]
-    fn next_piece(&mut self) -> Option<(f64, Excitation, bool)> {
-        self.0.next().map(|(t, e)| (t, e, false))
+    fn next_piece(&mut self) -> Option<(f64, Excitation)> {
+        self.0.next()
     }
 }
 

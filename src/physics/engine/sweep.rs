@@ -191,21 +191,29 @@ impl Simulator {
 
         'steps: loop {
             if cur.i > cur.n {
-                let Some((t_end, exc, continues)) = pieces.next_piece() else {
-                    break;
-                };
-                if continues {
+                if let Some((t_end, exc)) = pieces.next_continuing() {
                     // The source's promise: a record's next sample, as long
                     // as the last, Fext constant, every value finite.
-                    (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
+                    let Excitation {
+                        ag,
+                        ag_rate,
+                        fext,
+                        fext_rate,
+                    } = exc;
+                    (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
+                    (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
+                    (cur.exc.fext, cur.exc.fext_rate) = (fext, fext_rate);
                     inp = Inputs {
-                        ag: exc.ag,
-                        fext: exc.fext,
-                        ag_rate: exc.ag_rate,
-                        fext_rate: exc.fext_rate,
+                        ag,
+                        fext,
+                        ag_rate,
+                        fext_rate,
                     };
                     continue;
                 }
+                let Some((t_end, exc)) = pieces.next_piece() else {
+                    break;
+                };
                 // A jump of Fext, or a bad value: the piece is begun anew.
                 if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() {
                     pending = Some((t_end, exc));
