@@ -5,7 +5,7 @@
 //! A record is a table of samples; between samples the acceleration is
 //! linear, before the first and after the last it is zero.
 
-use crate::physics::engine::{Excitation, SimError};
+use crate::physics::engine::{Excitation, PieceSource, SimError};
 use crate::physics::solver::Stepper;
 use std::fmt;
 
@@ -120,9 +120,12 @@ pub fn advance_with_record<S: Stepper>(
     } else {
         f64::INFINITY
     };
-    let pieces = RecordPieces {
+    let n = record.time.len().min(record.accel.len());
+    let mut pieces = RecordPieces {
         dt,
         inv_dt: 1.0 / dt,
+        time: &record.time[..n],
+        accel: &record.accel[..n],
         record,
         scale,
         extra: *extra,
@@ -130,15 +133,24 @@ pub fn advance_with_record<S: Stepper>(
         t,
         t_end,
         next_sample: record.first_after(t),
+        stop: 0,
+        after_end: record.first_after(t_end).min(n),
+        promise: extra.fext_rate == 0.0 && extra.fext.is_finite() && dt > 0.0 && dt.is_finite(),
+        last_whole: false,
+        yielded: false,
         done: false,
     };
-    sim.advance_pieces(pieces)
+    pieces.align();
+    sim.advance_source(pieces)
 }
 
 /// The linear pieces of `scale * record + extra` from `t` to `t_end`, one
 /// per sample interval (the first and last may be partial).
 struct RecordPieces<'a> {
     record: &'a GroundMotion,
+    /// The samples (as many times as accelerations).
+    time: &'a [f64],
+    accel: &'a [f64],
     /// The record's first interval and its reciprocal: an interval as long
     /// up to the rounding of its times takes its slope by a product (a
     /// division per sample would sit on the engine's critical path).
@@ -151,10 +163,38 @@ struct RecordPieces<'a> {
     t_end: f64,
     /// First sample after `t`.
     next_sample: usize,
+    /// While `next_sample < stop`, the next piece is a whole sample
+    /// interval ending at or before `t_end` (0 while `t` is not on a sample).
+    stop: usize,
+    /// First sample after `t_end` (at most the number of samples).
+    after_end: usize,
+    /// `Fext` constant and finite (it cannot jump between pieces), and the
+    /// first interval positive and finite: a whole interval as long as it
+    /// may be promised to continue the last one.
+    promise: bool,
+    /// The piece yielded last was a whole interval as long as the first
+    /// (and `promise`).
+    last_whole: bool,
+    /// A piece was yielded (or the lean path will yield one next): the
+    /// pieces end once `t` reaches `t_end`.
+    yielded: bool,
     done: bool,
 }
 
 impl RecordPieces<'_> {
+    /// Where `t` is on a sample, the whole intervals that follow it up to
+    /// `t_end` take the lean path.
+    fn align(&mut self) {
+        let i = self.next_sample;
+        self.stop = if i >= 1 && i < self.time.len() && self.time[i - 1] == self.t {
+            self.after_end
+        } else {
+            0
+        };
+        // The lean path yields next (it does not mark its pieces).
+        self.yielded |= i < self.stop;
+    }
+
     /// The piece from `self.t` given its value, slope and end, and the
     /// iterator moved past it.
     #[inline(always)]
@@ -179,45 +219,103 @@ impl RecordPieces<'_> {
         (t1, exc)
     }
 
-    /// A partial interval, or one before the first or after the last sample.
-    #[cold]
-    #[inline(never)]
-    fn partial(&mut self) -> (f64, Excitation) {
-        let i = self.next_sample;
-        let (a, slope, piece_end) = self.record.piece_before(i, self.t);
-        let (t1, exc) = self.piece(a, slope, piece_end, i);
-        if i >= self.record.time.len() {
-            self.next_sample = i;
-        }
-        (t1, exc)
-    }
-}
-
-impl Iterator for RecordPieces<'_> {
-    type Item = (f64, Excitation);
-
+    /// The whole sample interval that ends at sample `i` (its start at
+    /// `self.t`): its start value, slope, and whether it is as long as the
+    /// first interval up to rounding.
     #[inline(always)]
-    fn next(&mut self) -> Option<(f64, Excitation)> {
-        if self.done {
-            return None;
-        }
-        let (time, accel, i) = (
-            &self.record.time[..],
-            &self.record.accel[..],
-            self.next_sample,
-        );
-        if i == 0 || i >= time.len() || i >= accel.len() || time[i - 1] != self.t {
-            return Some(self.partial());
-        }
-        // A whole sample interval from its first sample (the usual case).
-        let (t0, t1) = (time[i - 1], time[i]);
-        let rise = accel[i] - accel[i - 1];
-        let slope = if ((t1 - t0) - self.dt).abs() <= 1e-15 * (t1.abs() + self.dt) {
+    fn whole(&self, i: usize) -> (f64, f64, bool) {
+        let ([t0, t1], [a0, a1]) = (pair(self.time, i), pair(self.accel, i));
+        let rise = a1 - a0;
+        let uniform = ((t1 - t0) - self.dt).abs() <= 1e-15 * (t1.abs() + self.dt);
+        let slope = if uniform {
             rise * self.inv_dt
         } else {
             rise / (t1 - t0)
         };
-        Some(self.piece(accel[i - 1], slope, t1, i))
+        (a0, slope, uniform)
+    }
+
+    /// A partial interval, one before the first or after the last sample,
+    /// or a whole one that `t_end` cuts.
+    #[cold]
+    #[inline(never)]
+    fn partial(&mut self) -> Option<(f64, Excitation)> {
+        if self.done || (self.yielded && self.t >= self.t_end) {
+            return None;
+        }
+        let i = self.next_sample;
+        let (t1, exc) = if i >= 1 && i < self.time.len() && self.time[i - 1] == self.t {
+            let (a, slope, _) = self.whole(i);
+            self.piece(a, slope, self.time[i], i)
+        } else {
+            let (a, slope, piece_end) = self.record.piece_before(i, self.t);
+            let piece = self.piece(a, slope, piece_end, i);
+            if i >= self.record.time.len() {
+                self.next_sample = i;
+            }
+            piece
+        };
+        self.last_whole = false;
+        self.yielded = true;
+        self.align();
+        Some((t1, exc))
+    }
+}
+
+/// Samples `i - 1` and `i` (one bounds check).
+#[inline(always)]
+fn pair(x: &[f64], i: usize) -> [f64; 2] {
+    let p = &x[i - 1..i + 1];
+    [p[0], p[1]]
+}
+
+impl PieceSource for RecordPieces<'_> {
+    #[inline]
+    fn next_piece(&mut self) -> Option<(f64, Excitation)> {
+        let i = self.next_sample;
+        if i >= self.stop {
+            return self.partial();
+        }
+        let (a, slope, uniform) = self.whole(i);
+        self.last_whole = uniform & self.promise;
+        let (t1, exc) = self.lean(i, a, slope);
+        (self.t, self.next_sample) = (t1, i + 1);
+        Some((t1, exc))
+    }
+
+    #[inline(always)]
+    fn next_continuing(&mut self) -> Option<(f64, Excitation)> {
+        let i = self.next_sample;
+        if i >= self.stop || !self.last_whole {
+            return None;
+        }
+        // A whole sample interval from its first sample, ending at or
+        // before `t_end`, as long as the last (the usual case).
+        let (a, slope, uniform) = self.whole(i);
+        let (t1, exc) = self.lean(i, a, slope);
+        // As `Excitation::check` (Fext is finite by the promise).
+        if !(uniform && (exc.ag + exc.ag_rate + t1).is_finite()) {
+            return None;
+        }
+        (self.t, self.next_sample) = (t1, i + 1);
+        Some((t1, exc))
+    }
+}
+
+impl RecordPieces<'_> {
+    /// The whole interval that ends at sample `i <= t_end` (from `self.t`,
+    /// its start): `piece` without its cuts, and without moving on.
+    #[inline(always)]
+    fn lean(&self, i: usize, a: f64, slope: f64) -> (f64, Excitation) {
+        let t1 = pair(self.time, i)[1];
+        let (e, dt) = (&self.extra, self.t - self.t_start);
+        let exc = Excitation {
+            ag: self.scale * a + e.ag + e.ag_rate * dt,
+            ag_rate: self.scale * slope + e.ag_rate,
+            fext: e.fext + e.fext_rate * dt,
+            fext_rate: e.fext_rate,
+        };
+        (t1, exc)
     }
 }
 

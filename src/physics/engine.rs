@@ -44,8 +44,8 @@ mod sweep;
 use events::Segment;
 use pieces::Piece;
 pub use pieces::{
-    auto_step, substeps, Excitation, ACCURATE_H_OMEGA, ACCURATE_MAX_STEP, EVENT_TIME_TOL,
-    FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP, STABLE_H_OMEGA,
+    auto_step, substeps, Excitation, PieceSource, Plain, ACCURATE_H_OMEGA, ACCURATE_MAX_STEP,
+    EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP, STABLE_H_OMEGA,
 };
 pub use report::{Outputs, SimError, Stats};
 use structure_rk4::{move_bodies, upper_cluster_step, Structure, StructureRk4};
@@ -281,8 +281,13 @@ impl Simulator {
         &mut self,
         pieces: impl IntoIterator<Item = (f64, Excitation)>,
     ) -> Result<(), SimError> {
-        let mut pieces = pieces.into_iter();
-        let mut pending = pieces.next();
+        self.advance_source(Plain(pieces.into_iter()))
+    }
+
+    /// [`Simulator::advance_pieces`] from a [`PieceSource`] (a record's
+    /// samples promise the pieces that continue the previous one).
+    pub fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
+        let mut pending = pieces.next_piece();
         while let Some((t_end, exc)) = pending.take() {
             let mut piece = self.begin_piece(t_end, &exc)?;
             match self.settings.method {
@@ -303,7 +308,7 @@ impl Simulator {
                         self.step_switch_at_end(piece.end_of(i), &exc, piece.t_ref);
                         self.check_work()?;
                     }
-                    pending = pieces.next();
+                    pending = pieces.next_piece();
                 }
             }
             self.end_piece(&piece);

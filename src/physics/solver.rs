@@ -2,7 +2,7 @@
 //! scene. 1 and 2 are the exact stick/slip engine with located or step-end
 //! switching; 3 is the tanh-regularized baseline (not a recommended mode).
 
-use crate::physics::engine::{self, Excitation, Outputs, SimError, Simulator};
+use crate::physics::engine::{self, Excitation, Outputs, PieceSource, SimError, Simulator};
 use crate::physics::params::{check_scalar, Method, ParamError, Params, Settings, MIN_MAX_STEP};
 use crate::physics::regularized::{self, RegularizedSimulator};
 use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
@@ -26,6 +26,14 @@ pub trait Stepper {
         }
         Ok(())
     }
+
+    /// The same from a [`PieceSource`].
+    fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
+        while let Some((t_end, exc)) = pieces.next_piece() {
+            self.advance(t_end, &exc)?;
+        }
+        Ok(())
+    }
 }
 
 impl Stepper for Simulator {
@@ -40,6 +48,9 @@ impl Stepper for Simulator {
         pieces: impl Iterator<Item = (f64, Excitation)>,
     ) -> Result<(), SimError> {
         Simulator::advance_pieces(self, pieces)
+    }
+    fn advance_source(&mut self, pieces: impl PieceSource) -> Result<(), SimError> {
+        Simulator::advance_source(self, pieces)
     }
 }
 
@@ -256,6 +267,12 @@ impl Stepper for Solver {
         match self {
             Solver::Exact(s) => s.advance_pieces(pieces),
             Solver::Regularized(s) => Stepper::advance_pieces(s, pieces),
+        }
+    }
+    fn advance_source(&mut self, pieces: impl PieceSource) -> Result<(), SimError> {
+        match self {
+            Solver::Exact(s) => s.advance_source(pieces),
+            Solver::Regularized(s) => Stepper::advance_source(s, pieces),
         }
     }
 }

@@ -18,6 +18,7 @@
 //! the substep, which let the fast path prove that no guard changes sign and
 //! that no peak is missed between the substep's ends.
 
+use super::sweep::Rows;
 use crate::physics::system::System;
 
 /// Highest degree of the Taylor sum of `exp(A h)`; a map stops at the first
@@ -92,6 +93,10 @@ pub(super) struct ExactMap {
     pub(super) w2: f64,
     pub(super) cm: f64,
     pub(super) c: f64,
+    /// The driver's rows and work coefficients on this map, and their
+    /// rates in the rest of a substep's length (`sweep::Rows::of_map`).
+    pub(super) rows: Rows,
+    pub(super) rows_rate: Rows,
 }
 
 impl ExactMap {
@@ -173,7 +178,7 @@ impl ExactMap {
                 .fold(0.0, f64::max)
         };
         let (five_over_three, one_over_three) = (over_three(5), over_three(1));
-        ExactMap {
+        let mut map = ExactMap {
             degree,
             five_over_three,
             one_over_three,
@@ -187,7 +192,11 @@ impl ExactMap {
             w2,
             cm,
             c: sys.c,
-        }
+            rows: Rows::default(),
+            rows_rate: Rows::default(),
+        };
+        [map.rows, map.rows_rate] = Rows::of_map(&map);
+        map
     }
 
     /// `∫ v² dτ` over the substep from `z`.

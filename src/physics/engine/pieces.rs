@@ -51,6 +51,35 @@ impl Excitation {
     }
 }
 
+/// A source of consecutive linear pieces of excitation, each given by its
+/// end time and its excitation (values at its start). Any iterator of
+/// pieces is a source through [`Plain`].
+pub trait PieceSource {
+    /// The next piece, or `None` at the end.
+    fn next_piece(&mut self) -> Option<(f64, Excitation)>;
+
+    /// The next piece only where the source promises that it continues its
+    /// previous one as a record's next sample does (as long as it up to the
+    /// rounding of the times, 1e-15 relative, `Fext` constant, every value
+    /// finite): the driver then keeps its substeps without checking it
+    /// again. `None` takes nothing (the driver asks `next_piece`). A lean
+    /// method of its own, so that the common piece is built in registers.
+    #[inline(always)]
+    fn next_continuing(&mut self) -> Option<(f64, Excitation)> {
+        None
+    }
+}
+
+/// An iterator of pieces as a [`PieceSource`] that promises nothing.
+pub struct Plain<I>(pub I);
+
+impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for Plain<I> {
+    #[inline(always)]
+    fn next_piece(&mut self) -> Option<(f64, Excitation)> {
+        self.0.next()
+    }
+}
+
 /// One linear piece of excitation from `t_ref` to `t_end`, cut into `n`
 /// equal substeps of `h`; `i` is the next substep to take (1-based).
 #[derive(Clone, Copy, Debug)]

@@ -26,7 +26,7 @@ use super::exact_events::raise_substep_peaks;
 use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
 use super::proofs::{in_band_proved, raise_peak_proved, slip_guard_proved, structure_peaks_proved};
-use super::{move_bodies, Excitation, Piece, Simulator};
+use super::{move_bodies, Excitation, Piece, PieceSource, Simulator};
 use crate::physics::hermite;
 use crate::physics::params::MAX_BODIES;
 
@@ -60,65 +60,23 @@ impl WorkSums {
         }
     }
 
-    /// `Σ ∫ v² dτ`: the sum of `ExactMap::int_v2` over the substeps.
-    fn int_v2(&self, map: &ExactMap) -> f64 {
-        map.quad
-            .iter()
-            .zip(&self.products)
-            .map(|(q, s)| q * s)
-            .sum()
-    }
-
-    /// The input work per unit mass, summed: per substep
-    /// `(p - L) (u1 - u) + p' (h u1 - ∫u)` with `u1 = U z`, `L` the mode's
-    /// load per unit mass (`p - L = Fext / m - ag`).
-    fn input(&self, map: &ExactMap, load_accel: f64) -> f64 {
-        let (s, l, u) = (&self.products, &self.linear, &map.u);
-        let h = map.h;
-        // Σ (p - L) (U z - u): the rows times the sums of p z_j and of z_j,
-        // with U's first entry less one (the `- u`).
-        let u0m1 = u[0] - 1.0;
-        let with_p = u0m1 * s[5] + u[1] * s[7] + u[2] * s[2] + u[3] * s[9];
-        let with_1 = u0m1 * l[0] + u[1] * l[1] + u[2] * l[2] + u[3] * l[3];
-        // Σ p' (h U - I) z.
-        let w: [f64; 4] = std::array::from_fn(|j| h * u[j] - map.int_u[j]);
-        let with_rate = w[0] * s[6] + w[1] * s[8] + w[2] * s[9] + w[3] * s[3];
-        with_p - load_accel * with_1 + with_rate
-    }
-
-    /// Adds the sums' work to `[input, viscous]` and starts anew: on
-    /// `map`, and over the rest `delta` of each substep to first order (the
-    /// integrands at the map's end times `delta`: `m (p - L) v` and `c v²`,
-    /// with `v = V z` and `p = z_2 + h z_3` at the end).
-    fn flush(
-        &mut self,
-        map: &ExactMap,
-        delta: f64,
-        mass: f64,
-        load_accel: f64,
-        work: &mut [f64; 2],
-    ) {
-        work[0] += mass * self.input(map, load_accel);
-        work[1] += map.c * self.int_v2(map);
-        if delta != 0.0 {
-            let (s, l, v) = (&self.products, &self.linear, &map.v);
-            // Rows of the packed products: S_2j and S_3j.
-            let row2 = [s[5], s[7], s[2], s[9]];
-            let row3 = [s[6], s[8], s[9], s[3]];
-            let p_v: f64 = (0..4).map(|j| v[j] * (row2[j] + map.h * row3[j])).sum();
-            let sum_v = dot(v, l);
-            let diagonal = [s[0], s[1], s[2], s[3]];
-            let square: f64 = (0..4).map(|i| v[i] * v[i] * diagonal[i]).sum::<f64>()
-                + 2.0
-                    * (v[0] * v[1] * s[4]
-                        + v[0] * v[2] * s[5]
-                        + v[0] * v[3] * s[6]
-                        + v[1] * v[2] * s[7]
-                        + v[1] * v[3] * s[8]
-                        + v[2] * v[3] * s[9]);
-            work[0] += delta * mass * (p_v - load_accel * sum_v);
-            work[1] += delta * map.c * square;
-        }
+    /// Adds the sums' work to `[input, viscous]` and starts anew, with the
+    /// coefficients of `rows` (the map's exact work forms and the first
+    /// order in the rest of its length, [`Rows::new`]): per unit mass the
+    /// input work is `P·S - L (W·Σz)`, the viscous `c (V·S)`.
+    #[inline(never)]
+    fn flush(&mut self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
+        let (s, l) = (&self.products, &self.linear);
+        let dot10 = |a: &[f64; 10]| -> f64 {
+            let mut x = 0.0;
+            for k in 0..10 {
+                x += a[k] * s[k];
+            }
+            x
+        };
+        let with_load = dot(&rows.work_l, l);
+        work[0] += mass * (dot10(&rows.work_p) - load_accel * with_load);
+        work[1] += rows.c * dot10(&rows.work_v);
         *self = WorkSums::default();
     }
 }
@@ -155,7 +113,7 @@ impl Simulator {
     pub(super) fn sweep(
         &mut self,
         piece: &mut Piece,
-        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+        pieces: &mut impl PieceSource,
     ) -> Option<(f64, Excitation)> {
         match self.dynamics.n_clusters {
             1 => self.sweep_clusters::<1>(piece, pieces),
@@ -176,7 +134,7 @@ impl Simulator {
     fn sweep_clusters<const NC: usize>(
         &mut self,
         piece: &mut Piece,
-        pieces: &mut impl Iterator<Item = (f64, Excitation)>,
+        pieces: &mut impl PieceSource,
     ) -> Option<(f64, Excitation)> {
         let h_max = self.h_max;
         let (sys, d, maps) = (&self.sys, &self.dynamics, &mut self.maps);
@@ -202,8 +160,9 @@ impl Simulator {
         let mut cur = *piece;
         let first = maps.index(sys, mass, canonical_length(cur.h));
         let mut map = maps.get(first);
-        let (mut w2, mut cm) = (map.w2, map.cm);
         let mut rows = Rows::new(map, cur.h);
+        let (mut row_u, mut row_v) = (rows.u, rows.v);
+        let (mut w2, mut cm) = (map.w2, map.cm);
 
         // The run's state.
         let mut u0 = self.u[0];
@@ -232,7 +191,27 @@ impl Simulator {
 
         'steps: loop {
             if cur.i > cur.n {
-                let Some((t_end, exc)) = pieces.next() else {
+                if let Some((t_end, exc)) = pieces.next_continuing() {
+                    // The source's promise: a record's next sample, as long
+                    // as the last, Fext constant, every value finite.
+                    let Excitation {
+                        ag,
+                        ag_rate,
+                        fext,
+                        fext_rate,
+                    } = exc;
+                    (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
+                    (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
+                    (cur.exc.fext, cur.exc.fext_rate) = (fext, fext_rate);
+                    inp = Inputs {
+                        ag,
+                        fext,
+                        ag_rate,
+                        fext_rate,
+                    };
+                    continue;
+                }
+                let Some((t_end, exc)) = pieces.next_piece() else {
                     break;
                 };
                 // A jump of Fext, or a bad value: the piece is begun anew.
@@ -245,7 +224,7 @@ impl Simulator {
                     (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
                 } else {
                     cur = Piece::new(t0, t_end, &exc, h_max);
-                    sums.flush(map, rows.delta, mass, load_accel, &mut work);
+                    sums.flush(&rows, mass, load_accel, &mut work);
                     let hc = canonical_length(cur.h);
                     if hc != map.h {
                         let i = maps.index(sys, mass, hc);
@@ -253,6 +232,7 @@ impl Simulator {
                         (w2, cm) = (map.w2, map.cm);
                     }
                     rows = Rows::new(map, cur.h);
+                    (row_u, row_v) = (rows.u, rows.v);
                 }
                 // A0 carries over: it is continuous (a jump of Fext ends the run).
                 inp = Inputs {
@@ -275,7 +255,7 @@ impl Simulator {
                 load_accel + inp.fext * inv_mass - inp.ag,
                 fext_rate_m - inp.ag_rate,
             ];
-            let (u1, v1) = (dot(&rows.u, &z), dot(&rows.v, &z));
+            let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
             let (ag1, fext1) = (inp.ag + inp.ag_rate * hs, inp.fext + inp.fext_rate * hs);
             let a1 = load_accel + fext1 * inv_mass - w2 * u1 - cm * v1;
             let s3 = map.sup_v(3, &z);
@@ -379,7 +359,7 @@ impl Simulator {
 
         *piece = cur;
         if taken > 0 {
-            sums.flush(map, rows.delta, mass, load_accel, &mut work);
+            sums.flush(&rows, mass, load_accel, &mut work);
             // Input work on the upper clusters over the run, exact: with
             // v_c' = A_c - ag, -m ag v_c = d(m v_c²/2)/dt - m A_c v_c.
             let mut upper = 0.0;
@@ -411,22 +391,106 @@ impl Simulator {
 
 /// The rows of a substep of length `h` on `z = [u, v, p, p']`: the map's
 /// (built for `h` up to rounding), completed to first order in their
-/// difference `delta` (u' = v, v' the acceleration).
-struct Rows {
-    delta: f64,
+/// difference `delta` (u' = v, v' the acceleration); and the coefficients
+/// of the run's work on the [`WorkSums`] (products packed as
+/// `ExactMap::quad`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Rows {
     u: [f64; 4],
     v: [f64; 4],
+    /// Input work per unit mass over a substep, without the mode's load:
+    /// `(p - L)(u1 - u) + p' (h u1 - ∫u)` on the map, plus `delta` times
+    /// the integrand at its end, `(p - L) v`, with `v = V z` and `p = z_2 +
+    /// h z_3` there: its terms in `p` on the products, and `work_l` the row
+    /// that multiplies `-L` (on the sums of `z`).
+    work_p: [f64; 10],
+    work_l: [f64; 4],
+    /// `∫ v²` on the map (its quadratic form) plus `delta v²` at its end.
+    work_v: [f64; 10],
+    c: f64,
 }
 
 impl Rows {
-    fn new(map: &ExactMap, h: f64) -> Rows {
+    /// The rows of a substep of length `h` on `map`: `map.rows` plus `h -
+    /// map.h` times `map.rows_rate`.
+    #[inline]
+    pub(super) fn new(map: &ExactMap, h: f64) -> Rows {
         let delta = h - map.h;
-        let accel = acceleration_row(map);
+        let (r, d) = (&map.rows, &map.rows_rate);
         Rows {
-            delta,
-            u: std::array::from_fn(|k| map.u[k] + delta * map.v[k]),
-            v: std::array::from_fn(|k| map.v[k] + delta * accel[k]),
+            u: std::array::from_fn(|k| r.u[k] + delta * d.u[k]),
+            v: std::array::from_fn(|k| r.v[k] + delta * d.v[k]),
+            work_p: std::array::from_fn(|k| r.work_p[k] + delta * d.work_p[k]),
+            work_l: std::array::from_fn(|k| r.work_l[k] + delta * d.work_l[k]),
+            work_v: std::array::from_fn(|k| r.work_v[k] + delta * d.work_v[k]),
+            c: r.c,
         }
+    }
+
+    /// The map's own rows (`delta = 0`) and their rates in `delta`, from
+    /// its Taylor sums: `[rows, rate]`.
+    pub(super) fn of_map(map: &ExactMap) -> [Rows; 2] {
+        let accel = acceleration_row(map);
+        let (u, v, hm) = (&map.u, &map.v, map.h);
+        // Σ (p - L)(U z - u) over products with p = z_2 (U's first entry
+        // less one for the `- u`), Σ p' (h U - I) z with p' = z_3.
+        let u0m1 = u[0] - 1.0;
+        let w: [f64; 4] = std::array::from_fn(|j| hm * u[j] - map.int_u[j]);
+        // Packed: 00, 11, 22, 33, 01, 02, 03, 12, 13, 23.
+        let rows = Rows {
+            u: *u,
+            v: *v,
+            work_p: [
+                0.0,
+                0.0,
+                u[2],
+                w[3],
+                0.0,
+                u0m1,
+                w[0],
+                u[1],
+                w[1],
+                u[3] + w[2],
+            ],
+            work_l: [u0m1, u[1], u[2], u[3]],
+            work_v: map.quad,
+            c: map.c,
+        };
+        // The rest `delta`, to first order: u' = v, v' the acceleration;
+        // the input work's integrand at the end `(z_2 + h z_3 - L) (V z)`,
+        // the viscous one `(V z)²`.
+        let hv: [f64; 4] = std::array::from_fn(|j| hm * v[j]);
+        let rate = Rows {
+            u: *v,
+            v: accel,
+            work_p: [
+                0.0,
+                0.0,
+                v[2],
+                hv[3],
+                0.0,
+                v[0],
+                hv[0],
+                v[1],
+                hv[1],
+                v[3] + hv[2],
+            ],
+            work_l: *v,
+            work_v: [
+                v[0] * v[0],
+                v[1] * v[1],
+                v[2] * v[2],
+                v[3] * v[3],
+                2.0 * v[0] * v[1],
+                2.0 * v[0] * v[2],
+                2.0 * v[0] * v[3],
+                2.0 * v[1] * v[2],
+                2.0 * v[1] * v[3],
+                2.0 * v[2] * v[3],
+            ],
+            c: 0.0,
+        };
+        [rows, rate]
     }
 }
 
