@@ -559,8 +559,14 @@ impl<'a> Walk<'a> {
             }
             return;
         }
+        // A stick that must break is tried slipping first: the best
+        // assignment usually lets it go, and once found the bound drops
+        // every branch that keeps it stuck. The order changes only how soon
+        // the best is found, never which it is (the key decides).
         let options: &[Contact] = if self.index[j] == usize::MAX {
             &[]
+        } else if self.req.must_break & (1 << j) != 0 {
+            &[Contact::SlipForward, Contact::SlipBackward, Contact::Stuck]
         } else {
             &[Contact::Stuck, Contact::SlipForward, Contact::SlipBackward]
         };
