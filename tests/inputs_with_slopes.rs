@@ -199,47 +199,161 @@ fn a_record_plus_ramped_inputs_matches_the_exact_reference() {
         let record = broadband_record(&mut rng, 4.0, [0.005, 0.01, 0.02][case % 3]);
         let steps = random_inputs(&mut rng, &p, 4.0);
         let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
-        let mut reference = vec![];
-        let mut t = 0.0;
         for step in &steps {
             let extra = excitation(step);
             stacked_live_load::ground::record::advance_with_record(
                 &mut sim, step.t_end, &record, 1.0, &extra,
             )
             .unwrap();
-            // The same step cut at the record's samples.
-            let mut cut: Vec<f64> = record
-                .time
-                .iter()
-                .copied()
-                .filter(|&x| x > t && x < step.t_end)
-                .collect();
-            cut.push(step.t_end);
-            let mut from = t;
-            for &end in &cut {
-                // The record is zero after its last sample.
-                let i = record.time.partition_point(|&x| x <= from);
-                let (a, slope) = if i < record.time.len() {
-                    let (t0, t1) = (record.time[i - 1], record.time[i]);
-                    let slope = (record.accel[i] - record.accel[i - 1]) / (t1 - t0);
-                    (record.accel[i - 1] + slope * (from - t0), slope)
-                } else {
-                    (0.0, 0.0)
-                };
-                let dt = from - t;
-                reference.push(InputPiece {
-                    t_end: end,
-                    ag: a + step.ag + step.ag_rate * dt,
-                    ag_rate: slope + step.ag_rate,
-                    fext: step.fext + step.fext_rate * dt,
-                    fext_rate: step.fext_rate,
-                });
-                from = end;
-            }
-            t = step.t_end;
         }
+        let reference = record_plus_steps(&record, &steps);
         let exact = Exact::new(&p).run_pieces(0.0, &reference, 16);
         let label = format!("record case {case} ({n_blocks} blocks)");
         compare(&sim, &exact, &label);
+    }
+}
+
+/// The reference's pieces of a record plus a master's steps (each step's
+/// inputs linear from its start): the steps cut at the record's samples.
+/// The record is zero after its last sample.
+fn record_plus_steps(record: &GroundMotion, steps: &[InputPiece]) -> Vec<InputPiece> {
+    let mut pieces = vec![];
+    let mut t = 0.0;
+    for step in steps {
+        let mut cut: Vec<f64> = record
+            .time
+            .iter()
+            .copied()
+            .filter(|&x| x > t && x < step.t_end)
+            .collect();
+        cut.push(step.t_end);
+        let mut from = t;
+        for &end in &cut {
+            let i = record.time.partition_point(|&x| x <= from);
+            let (a, slope) = if i < record.time.len() {
+                let (t0, t1) = (record.time[i - 1], record.time[i]);
+                let slope = (record.accel[i] - record.accel[i - 1]) / (t1 - t0);
+                (record.accel[i - 1] + slope * (from - t0), slope)
+            } else {
+                (0.0, 0.0)
+            };
+            let dt = from - t;
+            pieces.push(InputPiece {
+                t_end: end,
+                ag: a + step.ag + step.ag_rate * dt,
+                ag_rate: slope + step.ag_rate,
+                fext: step.fext + step.fext_rate * dt,
+                fext_rate: step.fext_rate,
+            });
+            from = end;
+        }
+        t = step.t_end;
+    }
+    pieces
+}
+
+#[test]
+fn the_fmu_with_a_record_and_inputs_with_derivatives_matches_the_exact_reference() {
+    // Through the FMU instance, as a master drives it: `recordFile` (a CSV
+    // written here), then at every communication point `ag` and `Fext` set
+    // (jumping or continuing), their first derivatives set, one doStep.
+    // Expected: the exact reference over the record cut at the steps; peaks
+    // and drift within 1e-9, Efriction never falling, the serialized state
+    // accepted at the end.
+    use stacked_live_load::fmi::instance::Status;
+    use stacked_live_load::fmi::variables::Id;
+    let mut rng = Rng(0xf00d_21);
+    let dir = std::env::temp_dir().join(format!("sll_slopes_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for case in 0..6 {
+        let n_blocks = [1, 2, 3, 5, 8, 0][case];
+        let p = random_scene(&mut rng, n_blocks);
+        let record = broadband_record(&mut rng, 3.0, [0.005, 0.01][case % 2]);
+        let file = dir.join(format!("rec{case}.csv"));
+        let csv: String = record
+            .time
+            .iter()
+            .zip(&record.accel)
+            .map(|(t, a)| format!("{t:?},{a:?}\n"))
+            .collect();
+        std::fs::write(&file, csv).unwrap();
+        let record = GroundMotion::read(&file, p.g).unwrap();
+        let steps = random_inputs(&mut rng, &p, 3.0);
+        let (mut inst, log) = instance("slopes");
+        assert_eq!(inst.setup_experiment(0.0, None), Status::Ok);
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        let set = |inst: &mut stacked_live_load::fmi::instance::Instance, id: Id, x: f64| {
+            assert_eq!(inst.set_real(&[id.vr()], &[x]), Status::Ok, "{id:?}");
+        };
+        assert_eq!(
+            inst.set_integer(&[Id::NBlocks.vr()], &[n_blocks as i32]),
+            Status::Ok
+        );
+        set(&mut inst, Id::Tp, p.tp);
+        set(&mut inst, Id::Zeta, p.zeta);
+        for j in 1..=n_blocks {
+            set(&mut inst, Id::Alpha(j), p.alpha[j - 1]);
+            set(&mut inst, Id::Mus(j), p.mus[j - 1]);
+            set(&mut inst, Id::Muk(j), p.muk[j - 1]);
+        }
+        let path = file.to_str().unwrap().to_string();
+        assert_eq!(inst.set_string(&[Id::RecordFile.vr()], &[path]), Status::Ok);
+        assert_eq!(
+            inst.exit_initialization_mode(),
+            Status::Ok,
+            "{}",
+            log.last()
+        );
+        let mut t = 0.0;
+        let mut friction = 0.0f64;
+        for step in &steps {
+            set(&mut inst, Id::Ag, step.ag);
+            set(&mut inst, Id::Fext, step.fext);
+            let vrs = [Id::Ag.vr(), Id::Fext.vr()];
+            let der = inst.set_input_derivatives(&vrs, &[1, 1], &[step.ag_rate, step.fext_rate]);
+            assert_eq!(der, Status::Ok, "{}", log.last());
+            assert_eq!(
+                inst.do_step(t, step.t_end - t),
+                Status::Ok,
+                "{}",
+                log.last()
+            );
+            t = step.t_end;
+            let mut ef = [0.0];
+            assert_eq!(inst.get_real(&[Id::Efriction.vr()], &mut ef), Status::Ok);
+            assert!(
+                ef[0] >= friction - 1e-12 * friction.max(1e-9),
+                "case {case}"
+            );
+            friction = ef[0];
+        }
+        let exact = Exact::new(&p).run_pieces(0.0, &record_plus_steps(&record, &steps), 16);
+        let mut out = [0.0; 2];
+        let vrs = [Id::PeakUp.vr(), Id::Up.vr()];
+        assert_eq!(inst.get_real(&vrs, &mut out), Status::Ok);
+        let scale = exact.peak_u0.max(1e-6);
+        assert!(
+            (out[0] - exact.peak_u0).abs() < 1e-9 * scale
+                && (out[1] - exact.u[0]).abs() < 1e-9 * scale,
+            "case {case}: peak {} / {}, up {} / {}",
+            out[0],
+            exact.peak_u0,
+            out[1],
+            exact.u[0]
+        );
+        for j in 1..=n_blocks {
+            let mut slip = [0.0];
+            assert_eq!(
+                inst.get_real(&[Id::PeakSlip(j).vr()], &mut slip),
+                Status::Ok
+            );
+            assert!(
+                rel_slip(slip[0], exact.peak_slip[j - 1]) < 1e-9,
+                "case {case} slip {j}"
+            );
+        }
+        let state = inst.save().unwrap();
+        let bytes = stacked_live_load::fmi::instance::Instance::serialize(&state);
+        assert!(stacked_live_load::fmi::instance::Instance::deserialize(&bytes).is_ok());
     }
 }
