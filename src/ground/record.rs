@@ -204,13 +204,7 @@ impl RecordPieces<'_> {
         } else {
             self.t_end
         };
-        let (e, dt) = (&self.extra, self.t - self.t_start);
-        let exc = Excitation {
-            ag: self.scale * a + e.ag + e.ag_rate * dt,
-            ag_rate: self.scale * slope + e.ag_rate,
-            fext: e.fext + e.fext_rate * dt,
-            fext_rate: e.fext_rate,
-        };
+        let exc = self.excitation(a, slope);
         self.t = t1;
         self.done = t1 >= self.t_end;
         if piece_end <= t1 {
@@ -307,15 +301,20 @@ impl RecordPieces<'_> {
     /// its start): `piece` without its cuts, and without moving on.
     #[inline(always)]
     fn lean(&self, i: usize, a: f64, slope: f64) -> (f64, Excitation) {
-        let t1 = pair(self.time, i)[1];
+        (pair(self.time, i)[1], self.excitation(a, slope))
+    }
+
+    /// `scale * record + extra` from `self.t`, where the record is `a`
+    /// with slope `slope`.
+    #[inline(always)]
+    fn excitation(&self, a: f64, slope: f64) -> Excitation {
         let (e, dt) = (&self.extra, self.t - self.t_start);
-        let exc = Excitation {
+        Excitation {
             ag: self.scale * a + e.ag + e.ag_rate * dt,
             ag_rate: self.scale * slope + e.ag_rate,
             fext: e.fext + e.fext_rate * dt,
             fext_rate: e.fext_rate,
-        };
-        (t1, exc)
+        }
     }
 }
 
