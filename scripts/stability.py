@@ -173,7 +173,7 @@ def main(argv=None):
               f"switches {sum(r['n_events'] for r in bounded)} vs reference {sum(r['ref_events'] for r in bounded)}")
     event = [r for r in rows if r["method"] == "event (auto)"]
     print(f"selection rule (mus > muk) decided {sum(r['n_ambiguous'] for r in event)} of "
-          f"{sum(r['n_events'] for r in event)} mode switches of the event-located runs")
+          f"{sum(r['n_events'] for r in event)} mode switches of the default's runs")
     print(f"wrote {args.out}/stability.csv and stability.png in {time.perf_counter() - started:.0f} s")
 
 

@@ -3,8 +3,8 @@
 //! importer's own overhead per simulation (Python and ctypes in
 //! `scripts/study_tasks.py`) would cost more than the simulation itself.
 //!
-//! Each set runs the whole record from rest with the default solver
-//! (event-located, automatic step), exactly as an FMU instance with those
+//! Each set runs the whole record from rest with the default solver (the
+//! exact engine), exactly as an FMU instance with those
 //! parameters and `recordFile` does in one `fmi2DoStep` over the record.
 #![allow(non_snake_case, clippy::missing_safety_doc)]
 
