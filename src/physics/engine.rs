@@ -67,6 +67,8 @@ pub struct Simulator {
     h_fine: f64,
     /// Exact maps in use (derived data only: rebuilt identically on demand).
     maps: exact_map::MapCache,
+    /// Dynamics of the modes met (derived data only, as `maps`).
+    dyn_cache: events::DynamicsCache,
     t: f64,
     u: [f64; MAX_BODIES],
     v: [f64; MAX_BODIES],
@@ -106,6 +108,7 @@ impl Simulator {
             exact: settings.method == Method::EventLocated,
             h_fine: (FINE_H_OMEGA / sys.omega_p).min(FINE_MAX_STEP),
             maps: exact_map::MapCache::default(),
+            dyn_cache: events::DynamicsCache::default(),
             sys,
             settings: *settings,
             t: 0.0,

@@ -29,12 +29,12 @@ pub enum Contact {
 
 impl Contact {
     /// Sign of the relative velocity in a slipping mode (0 otherwise).
+    #[inline]
     pub fn slip_sign(self) -> f64 {
-        match self {
-            Contact::SlipForward => 1.0,
-            Contact::SlipBackward => -1.0,
-            _ => 0.0,
-        }
+        // A table in declaration order (Stuck, SlipForward, SlipBackward,
+        // Free): no branch on the walk's hot path.
+        const SIGN: [f64; 4] = [0.0, 1.0, -1.0, 0.0];
+        SIGN[self as usize]
     }
 }
 
@@ -478,6 +478,8 @@ struct Walk<'a> {
     index: [usize; MAX_BODIES],
     /// Number of interfaces in `zero` from j up (entry n + 1: none).
     remaining: [i32; MAX_BODIES + 1],
+    /// The interfaces in `zero` with a contact to choose (bit j).
+    zero_ifaces: u32,
 }
 
 /// A cluster being built: its bottom body, its mass so far, and the
@@ -502,11 +504,15 @@ impl<'a> Walk<'a> {
         for j in (1..=sys.n).rev() {
             remaining[j] = remaining[j + 1] + i32::from(index[j] != usize::MAX);
         }
+        let zero_ifaces = (1..=sys.n)
+            .filter(|&j| index[j] != usize::MAX)
+            .fold(0, |m, j| m | (1 << j));
         Walk {
             sys,
             req,
             index,
             remaining,
+            zero_ifaces,
         }
     }
 
@@ -606,10 +612,7 @@ impl<'a> Walk<'a> {
     fn close(&self, open: Open, end: usize, mode: &Mode) -> Option<f64> {
         let (sys, a) = (self.sys, open.bottom);
         let slip_force = |j: usize| -sys.muk[j] * sys.normal[j] * mode.contact[j].slip_sign();
-        let mut mass = 0.0;
-        for i in a..end {
-            mass += sys.mass[i];
-        }
+        let mass = sys.mass_up[a][end];
         let mut load = 0.0;
         if a >= 1 {
             load += slip_force(a);
@@ -630,16 +633,17 @@ impl<'a> Walk<'a> {
                 return None;
             }
         }
-        // The stuck interfaces inside it, from the top down.
-        let mut above = 0.0;
-        for i in (a..end).rev() {
-            above += sys.mass[i];
-            if i > a && self.index[i] != usize::MAX {
-                let limit = sys.mus[i] * sys.normal[i];
-                let force = above * accel + f_top;
-                if (force.abs() - limit) / limit > CONSISTENCY_TOL {
-                    return None;
-                }
+        // The stuck interfaces of `zero` inside it (any order decides
+        // alike); the masses above them are the sums `Dynamics::clusters`
+        // adds, tabulated in `System::mass_down`.
+        let mut inside = self.zero_ifaces & ((1u32 << end) - 1) & !((2u32 << a) - 1);
+        while inside != 0 {
+            let i = inside.trailing_zeros() as usize;
+            inside &= inside - 1;
+            let limit = sys.mus[i] * sys.normal[i];
+            let force = sys.mass_down[i][end] * accel + f_top;
+            if (force.abs() - limit) / limit > CONSISTENCY_TOL {
+                return None;
             }
         }
         Some(accel)

@@ -27,6 +27,12 @@ pub struct System {
     pub muk: [f64; MAX_BODIES],
     /// Circular frequency of the bare structure, sqrt(k / mp).
     pub omega_p: f64,
+    /// `[a][e]`: mass of bodies a..e summed upwards from 0, in the order
+    /// [`crate::physics::mode::Dynamics::clusters`] adds a cluster's mass.
+    pub mass_up: [[f64; MAX_BODIES + 1]; MAX_BODIES],
+    /// `[i][e]`: mass of bodies i..e summed downwards from body e - 1, in
+    /// the order the mass above a stuck interface is added.
+    pub mass_down: [[f64; MAX_BODIES + 1]; MAX_BODIES],
 }
 
 impl System {
@@ -51,7 +57,25 @@ impl System {
             above += mass[j];
             normal[j] = p.g * above;
         }
+        let mut mass_up = [[0.0; MAX_BODIES + 1]; MAX_BODIES];
+        let mut mass_down = [[0.0; MAX_BODIES + 1]; MAX_BODIES];
+        for a in 0..=n {
+            let mut sum = 0.0;
+            for e in a + 1..=n + 1 {
+                sum += mass[e - 1];
+                mass_up[a][e] = sum;
+            }
+        }
+        for e in 1..=n + 1 {
+            let mut sum = 0.0;
+            for i in (0..e).rev() {
+                sum += mass[i];
+                mass_down[i][e] = sum;
+            }
+        }
         Ok(System {
+            mass_up,
+            mass_down,
             n,
             mass,
             k,

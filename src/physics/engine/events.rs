@@ -116,7 +116,8 @@ impl Simulator {
                 self.first_switch = self.t;
             }
             self.mode = res.mode;
-            self.dynamics = Dynamics::new(&self.sys, &self.mode);
+            self.dyn_cache
+                .load(&self.sys, &self.mode, &mut self.dynamics);
         }
     }
 
@@ -242,5 +243,50 @@ impl Simulator {
         self.t = t1;
         let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
         self.fire_violated(exc, t_ref, all, 0);
+    }
+}
+
+/// The dynamics of the modes met so far: a switch back to a mode copies
+/// them instead of rebuilding them (derived data only: each entry is
+/// `Dynamics::new` of its mode, rebuilt identically on demand).
+#[derive(Clone, Debug, Default)]
+pub(super) struct DynamicsCache {
+    keys: Vec<u32>,
+    dynamics: Vec<Dynamics>,
+    /// Entry replaced next once full.
+    next: usize,
+}
+
+/// How many modes' dynamics are kept (then the oldest is replaced).
+const DYNAMICS_CACHE_SIZE: usize = 32;
+
+impl DynamicsCache {
+    /// The mode as a number: two bits per interface, and the block count.
+    fn key(mode: &Mode) -> u32 {
+        let mut k = mode.n as u32;
+        for j in 1..=mode.n {
+            k |= (mode.contact[j] as u32) << (2 * j + 2);
+        }
+        k
+    }
+
+    /// Sets `out` to the dynamics of `mode`, built if missing.
+    pub(super) fn load(&mut self, sys: &System, mode: &Mode, out: &mut Dynamics) {
+        let key = DynamicsCache::key(mode);
+        if let Some(i) = self.keys.iter().position(|&k| k == key) {
+            out.clone_from(&self.dynamics[i]);
+            return;
+        }
+        let d = Dynamics::new(sys, mode);
+        out.clone_from(&d);
+        if self.keys.len() < DYNAMICS_CACHE_SIZE {
+            self.keys.push(key);
+            self.dynamics.push(d);
+        } else {
+            let i = self.next;
+            self.keys[i] = key;
+            self.dynamics[i] = d;
+            self.next = (i + 1) % DYNAMICS_CACHE_SIZE;
+        }
     }
 }
