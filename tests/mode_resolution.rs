@@ -290,7 +290,10 @@ fn an_interface_at_its_static_limit_breaks() {
 fn the_walk_decides_exactly_as_the_enumeration_of_every_assignment() {
     // `mode::resolve` walks the stack and drops inconsistent branches;
     // `mode::resolve_by_enumeration` tries all 3^k assignments in the
-    // selection rule's order. Expected: the same mode and the same
+    // selection rule's order. Both apply the one contact law
+    // (`mode::violation`, cluster by cluster), which the PGS test above and
+    // the exact reference check independently; this checks the walk's
+    // search, bound and ranking. Expected: the same mode and the same
     // ambiguity flag (consistent_count > 1 where some mus > muk), over
     // random requests with equal and unequal friction, some interfaces
     // that must break.

@@ -345,25 +345,73 @@ pub fn stick_capacity(sys: &System, j: usize) -> f64 {
 /// interfaces in `zero` (bit j set: relative velocity exactly zero). Zero
 /// or negative means consistent.
 pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
-    let d = Dynamics::clusters(sys, mode);
-    let mut worst = f64::NEG_INFINITY;
-    for j in 1..=sys.n {
-        if zero & (1 << j) == 0 {
+    let zero = zero & !free_mask(sys);
+    let (mut worst, mut bottom, mut accel_below) = (f64::NEG_INFINITY, 0, 0.0);
+    for end in 1..=sys.n + 1 {
+        if end <= sys.n && mode.is_stuck(end) {
             continue;
         }
-        let v = match mode.contact[j] {
-            Contact::Stuck => {
-                let limit = sys.mus[j] * sys.normal[j];
-                (d.force(j, mode, load0).abs() - limit) / limit
-            }
-            Contact::SlipForward | Contact::SlipBackward => {
-                -mode.contact[j].slip_sign() * d.rel_accel(j, load0) / sys.g
-            }
-            Contact::Free => f64::NEG_INFINITY,
-        };
-        worst = worst.max(v);
+        let (accel, w) = cluster_law(sys, mode, zero, load0, [bottom, end], accel_below);
+        worst = worst.max(w);
+        (bottom, accel_below) = (end, accel);
     }
     worst
+}
+
+/// Interfaces (bit j) that carry no friction.
+fn free_mask(sys: &System) -> u32 {
+    (1..=sys.n)
+        .filter(|&j| sys.is_free(j))
+        .fold(0, |m, j| m | (1 << j))
+}
+
+/// The contact law on one cluster of `mode`, bodies `bottom..end` (the
+/// interface `end` above it slips, is free, or is the top of the stack):
+/// its absolute acceleration, and the largest violation among the
+/// interfaces of `zero` it decides — the slip at its bottom against the
+/// cluster below (absolute acceleration `accel_below`), and its stuck
+/// interfaces inside (`-inf`: none). Consistent means `<= CONSISTENCY_TOL`.
+/// The one place this law is written: [`violation`] takes it cluster by
+/// cluster, the resolver's walk as each cluster closes. The arithmetic is
+/// that of [`Dynamics::clusters`] and [`Dynamics::force`], operation for
+/// operation (the masses are `System`'s tables of the same sums).
+#[inline]
+fn cluster_law(
+    sys: &System,
+    mode: &Mode,
+    zero: u32,
+    load0: f64,
+    [bottom, end]: [usize; 2],
+    accel_below: f64,
+) -> (f64, f64) {
+    let slip_force = |j: usize| -sys.muk[j] * sys.normal[j] * mode.contact[j].slip_sign();
+    let mass = sys.mass_up[bottom][end];
+    let mut load = 0.0;
+    if bottom >= 1 {
+        load += slip_force(bottom);
+    }
+    let f_top = if end <= sys.n { slip_force(end) } else { 0.0 };
+    if end <= sys.n {
+        load -= f_top;
+    }
+    let accel = if bottom == 0 {
+        (load + load0) * (1.0 / mass)
+    } else {
+        load / mass
+    };
+    let mut worst = f64::NEG_INFINITY;
+    if bottom >= 1 && zero & (1 << bottom) != 0 {
+        worst = -mode.contact[bottom].slip_sign() * (accel - accel_below) / sys.g;
+    }
+    let mut inside = zero & ((1u32 << end) - 1) & !((2u32 << bottom) - 1);
+    while inside != 0 {
+        let i = inside.trailing_zeros() as usize;
+        inside &= inside - 1;
+        let limit = sys.mus[i] * sys.normal[i];
+        let force = sys.mass_down[i][end] * accel + f_top;
+        worst = worst.max((force.abs() - limit) / limit);
+    }
+    (accel, worst)
 }
 
 /// What the resolution is asked to decide.
@@ -603,50 +651,20 @@ impl<'a> Walk<'a> {
         mode.contact[j] = self.req.mode.contact[j];
     }
 
-    /// Closes the cluster from `open.bottom` to body `end - 1` (interface
-    /// `end` above it slips, is free, or is the top of the stack): its
-    /// absolute acceleration if its stuck interfaces and the slip at its
-    /// bottom satisfy the contact law, `None` otherwise. The arithmetic is
-    /// that of [`Dynamics::clusters`] and [`violation`], operation for
-    /// operation, so that a walk and the enumeration decide alike.
+    /// Closes the cluster from `open.bottom` to body `end - 1`: its
+    /// absolute acceleration if it satisfies the contact law
+    /// ([`cluster_law`]), `None` otherwise.
     fn close(&self, open: Open, end: usize, mode: &Mode) -> Option<f64> {
-        let (sys, a) = (self.sys, open.bottom);
-        let slip_force = |j: usize| -sys.muk[j] * sys.normal[j] * mode.contact[j].slip_sign();
-        let mass = sys.mass_up[a][end];
-        let mut load = 0.0;
-        if a >= 1 {
-            load += slip_force(a);
-        }
-        let f_top = if end <= sys.n { slip_force(end) } else { 0.0 };
-        if end <= sys.n {
-            load -= f_top;
-        }
-        let accel = if a == 0 {
-            (load + self.req.load0) * (1.0 / mass)
-        } else {
-            load / mass
-        };
-        // The slip at the cluster's bottom, against the cluster below.
-        if a >= 1 && self.index[a] != usize::MAX {
-            let v = -mode.contact[a].slip_sign() * (accel - open.accel_below) / sys.g;
-            if v > CONSISTENCY_TOL {
-                return None;
-            }
-        }
-        // The stuck interfaces of `zero` inside it (any order decides
-        // alike); the masses above them are the sums `Dynamics::clusters`
-        // adds, tabulated in `System::mass_down`.
-        let mut inside = self.zero_ifaces & ((1u32 << end) - 1) & !((2u32 << a) - 1);
-        while inside != 0 {
-            let i = inside.trailing_zeros() as usize;
-            inside &= inside - 1;
-            let limit = sys.mus[i] * sys.normal[i];
-            let force = sys.mass_down[i][end] * accel + f_top;
-            if (force.abs() - limit) / limit > CONSISTENCY_TOL {
-                return None;
-            }
-        }
-        Some(accel)
+        let ends = [open.bottom, end];
+        let (accel, worst) = cluster_law(
+            self.sys,
+            mode,
+            self.zero_ifaces,
+            self.req.load0,
+            ends,
+            open.accel_below,
+        );
+        (worst <= CONSISTENCY_TOL).then_some(accel)
     }
 
     fn key(&self, mode: &Mode) -> Key {
