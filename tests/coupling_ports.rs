@@ -657,20 +657,6 @@ fn all_outputs(inst: &mut Instance) -> Vec<(Id, f64)> {
         .collect()
 }
 
-/// The block or interface number of an indexed output.
-fn block_of(id: Id) -> Option<usize> {
-    match id {
-        Id::Ub(j)
-        | Id::Vb(j)
-        | Id::Slip(j)
-        | Id::AbAbs(j)
-        | Id::F(j)
-        | Id::PeakSlip(j)
-        | Id::Stuck(j) => Some(j),
-        _ => None,
-    }
-}
-
 #[test]
 fn exactly_the_declared_outputs_see_an_input_set_at_a_communication_point() {
     // At communication points of stacks sticking and sliding under a seeded
@@ -703,7 +689,7 @@ fn exactly_the_declared_outputs_see_an_input_set_at_a_communication_point() {
     for (k, (n, reals)) in scenes.into_iter().enumerate() {
         let mut inst = initialized(&[(Id::NBlocks, n)], reals);
         let signal = Signal::new(90 + k as u64, 4.0);
-        let present = |id: Id| block_of(id).is_none_or(|j| j <= n as usize);
+        let present = |id: Id| id.block().is_none_or(|j| j <= n as usize);
         let mut seen_changing = std::collections::HashSet::new();
         let mut sliding_points = 0;
         for i in 0..60 {

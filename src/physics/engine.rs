@@ -338,8 +338,7 @@ impl Simulator {
         exc.check(self.t, t_end)?;
         if pieces::is_jump(exc.fext, self.fext_now) {
             // The guards that the jump violates fire as at any event.
-            let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
-            self.fire_violated(exc, self.t, all, 0);
+            self.fire_violated(exc, self.t, self.all_interfaces(), 0);
         }
         self.take_inputs_now(exc, self.t);
         Ok(Piece::new(self.t, t_end, exc, self.h_max))

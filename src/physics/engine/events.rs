@@ -83,6 +83,11 @@ impl Simulator {
         z
     }
 
+    /// Every interface of the stack (bit j).
+    pub(super) fn all_interfaces(&self) -> u32 {
+        (1..=self.sys.n).fold(0, |m, j| m | (1 << j))
+    }
+
     pub(super) fn stuck_mask(&self) -> u32 {
         (1..=self.sys.n)
             .filter(|&j| self.mode.is_stuck(j))
@@ -219,7 +224,7 @@ impl Simulator {
         muted: &mut u32,
         events: &mut u32,
     ) {
-        let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
+        let all = self.all_interfaces();
         self.fire_violated(exc, t_ref, all & !*muted, 1 << j);
         *events += 1;
         if *events >= MAX_EVENTS_PER_STEP {
@@ -241,7 +246,7 @@ impl Simulator {
         let x1 = self.segment(exc, t_ref).structure_after(h);
         self.accept(&x1, h, exc, t_ref);
         self.t = t1;
-        let all: u32 = (1..=self.sys.n).fold(0, |m, j| m | (1 << j));
+        let all = self.all_interfaces();
         self.fire_violated(exc, t_ref, all, 0);
     }
 }
