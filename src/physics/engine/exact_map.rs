@@ -1,5 +1,5 @@
-//! The structure's cluster over one substep as its exact affine map: RK4's
-//! substeps folded until the fold is at round-off.
+//! The structure's cluster over one substep as its exact affine map: the
+//! Taylor sum of exp(A h) to round-off.
 //!
 //! In one mode and one linear piece of excitation the structure's cluster is
 //! the linear system `z' = A z` over `z = [u, v, p, p']`, where `p(τ)` is its

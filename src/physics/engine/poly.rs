@@ -3,7 +3,7 @@
 //! a guard with a proof that none comes before it ([`first_zero`]), the
 //! largest `|y|` over a stretch ([`raise_peak_exact`]), and the integrals
 //! the work terms need. Used by the event path (`exact_events.rs`) and, for
-//! peaks, by the sample loop (`samples.rs`).
+//! peaks, by the one driver (`sweep.rs`).
 
 use super::proofs::stays_positive;
 
