@@ -5,7 +5,7 @@
 //! A record is a table of samples; between samples the acceleration is
 //! linear, before the first and after the last it is zero.
 
-use crate::physics::engine::{Excitation, PieceSource, SimError};
+use crate::physics::engine::{same_up_to_rounding, Excitation, PieceSource, SimError};
 use crate::physics::solver::Stepper;
 use std::fmt;
 
@@ -220,7 +220,7 @@ impl RecordPieces<'_> {
     fn whole(&self, i: usize) -> (f64, f64, bool) {
         let ([t0, t1], [a0, a1]) = (pair(self.time, i), pair(self.accel, i));
         let rise = a1 - a0;
-        let uniform = ((t1 - t0) - self.dt).abs() <= 1e-15 * (t1.abs() + self.dt);
+        let uniform = same_up_to_rounding(t1 - t0, self.dt, t1);
         let slope = if uniform {
             rise * self.inv_dt
         } else {

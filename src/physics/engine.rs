@@ -44,8 +44,9 @@ mod sweep;
 use events::Segment;
 use pieces::Piece;
 pub use pieces::{
-    auto_step, substeps, Excitation, PieceSource, Plain, ACCURATE_H_OMEGA, ACCURATE_MAX_STEP,
-    EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP, STABLE_H_OMEGA,
+    auto_step, same_up_to_rounding, substeps, Excitation, PieceSource, Plain, ACCURATE_H_OMEGA,
+    ACCURATE_MAX_STEP, EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
+    STABLE_H_OMEGA,
 };
 pub use report::{Outputs, SimError, Stats};
 use structure_rk4::{move_bodies, upper_cluster_step, Structure, StructureRk4};

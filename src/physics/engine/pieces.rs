@@ -118,8 +118,7 @@ impl Piece {
     /// this one's substeps.
     #[inline(always)]
     pub(super) fn same_length(&self, t_ref: f64, t_end: f64) -> bool {
-        let (length, before) = (t_end - t_ref, self.t_end - self.t_ref);
-        self.n > 0 && (length - before).abs() <= 1e-15 * (t_end.abs() + before)
+        self.n > 0 && same_up_to_rounding(t_end - t_ref, self.t_end - self.t_ref, t_end)
     }
 
     /// End time of substep `i` (the last one ends exactly at `t_end`).
@@ -158,6 +157,14 @@ pub const EVENT_TIME_TOL: f64 = 1e-12;
 /// Chatter guard: at most this many located events in one internal step;
 /// past it the rest of the step switches at its end only.
 pub const MAX_EVENTS_PER_STEP: u32 = 64;
+
+/// Whether an interval of `length` ending at `t_end` is as long as one of
+/// `other` up to the rounding of the times (1e-15 of the time): a
+/// record's next sample, which keeps the previous one's substeps and map.
+#[inline(always)]
+pub fn same_up_to_rounding(length: f64, other: f64, t_end: f64) -> bool {
+    (length - other).abs() <= 1e-15 * (t_end.abs() + other)
+}
 
 /// Whether `Fext` moving from `before` to `after` at an instant is a jump
 /// (which can break a stick), not the rounding of a ramp carried across
