@@ -347,9 +347,7 @@ impl Simulator {
 
     /// The inputs at the end of a finished piece.
     fn end_piece(&mut self, piece: &Piece) {
-        let length = piece.t_end - piece.t_ref;
-        self.ag_now = piece.exc.ag + piece.exc.ag_rate * length;
-        self.fext_now = piece.exc.fext + piece.exc.fext_rate * length;
+        (self.ag_now, self.fext_now) = piece.exc.at(piece.t_end - piece.t_ref);
     }
 
     fn segment(&self, exc: &Excitation, t_ref: f64) -> Segment<'_> {
@@ -360,7 +358,7 @@ impl Simulator {
             exc: *exc,
             rk: StructureRk4::new(&self.sys, &self.dynamics, exc, t_ref),
             t0: self.t,
-            ag0: exc.ag + exc.ag_rate * (self.t - t_ref),
+            ag0: exc.at(self.t - t_ref).0,
             u: &self.u,
             v: &self.v,
         }
@@ -378,7 +376,7 @@ impl Simulator {
         // gives them), and Simpson's rule, exact, for their input work.
         let mut upper_work = 0.0;
         let d = &self.dynamics;
-        let ag0 = exc.ag + exc.ag_rate * (self.t - t_ref);
+        let ag0 = exc.at(self.t - t_ref).0;
         for c in 1..d.n_clusters {
             let v = self.v[d.bottom[c]];
             let [dc, vc, work] =

@@ -166,9 +166,7 @@ impl Simulator {
     /// decision at an instant sees that instant's `Fext` (the structure's
     /// load), never the value at the piece's start.
     pub(super) fn take_inputs_now(&mut self, exc: &Excitation, t_ref: f64) {
-        let dt = self.t - t_ref;
-        self.ag_now = exc.ag + exc.ag_rate * dt;
-        self.fext_now = exc.fext + exc.fext_rate * dt;
+        (self.ag_now, self.fext_now) = exc.at(self.t - t_ref);
     }
 
     /// Guards of the current mode at the current state (infinite for free

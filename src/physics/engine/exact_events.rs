@@ -122,9 +122,7 @@ impl Flow {
         let (sys, d) = (&sim.sys, &sim.dynamics);
         let inv_mass = d.inv_mass0;
         let (w2, cm) = (sys.k * inv_mass, sys.c * inv_mass);
-        let dt = sim.t - t_ref;
-        let ag0 = exc.ag + exc.ag_rate * dt;
-        let fext0 = exc.fext + exc.fext_rate * dt;
+        let (ag0, fext0) = exc.at(sim.t - t_ref);
         let q0 = fext0 * inv_mass - ag0;
         let p0 = d.slip_load[0] * inv_mass + q0;
         let p1 = exc.fext_rate * inv_mass - exc.ag_rate;

@@ -18,6 +18,12 @@ pub struct Excitation {
 }
 
 impl Excitation {
+    /// `(ag, Fext)` at `dt` after the piece's start.
+    #[inline(always)]
+    pub fn at(&self, dt: f64) -> (f64, f64) {
+        (self.ag + self.ag_rate * dt, self.fext + self.fext_rate * dt)
+    }
+
     /// Checks that a step from `now` to `t_end` under this piece is possible:
     /// every value finite and time not going back.
     #[inline]

@@ -36,11 +36,7 @@ impl StructureRk4 {
     /// (ag, fext) at `t`.
     #[inline]
     pub(super) fn inputs(&self, t: f64) -> (f64, f64) {
-        let dt = t - self.t_ref;
-        (
-            self.exc.ag + self.exc.ag_rate * dt,
-            self.exc.fext + self.exc.fext_rate * dt,
-        )
+        self.exc.at(t - self.t_ref)
     }
 
     /// Absolute acceleration of the structure's cluster at a state.

@@ -93,10 +93,11 @@ struct Inputs {
 
 impl Inputs {
     fn at(piece: &Piece, t: f64) -> Inputs {
-        let (e, dt) = (&piece.exc, t - piece.t_ref);
+        let e = &piece.exc;
+        let (ag, fext) = e.at(t - piece.t_ref);
         Inputs {
-            ag: e.ag + e.ag_rate * dt,
-            fext: e.fext + e.fext_rate * dt,
+            ag,
+            fext,
             ag_rate: e.ag_rate,
             fext_rate: e.fext_rate,
         }
