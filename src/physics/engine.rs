@@ -41,7 +41,6 @@ mod state_check;
 mod structure_rk4;
 mod sweep;
 
-use events::Segment;
 use pieces::Piece;
 pub use pieces::{
     auto_step, same_up_to_rounding, substeps, Excitation, PieceSource, Plain, ACCURATE_H_OMEGA,
@@ -348,20 +347,6 @@ impl Simulator {
     /// The inputs at the end of a finished piece.
     fn end_piece(&mut self, piece: &Piece) {
         (self.ag_now, self.fext_now) = piece.exc.at(piece.t_end - piece.t_ref);
-    }
-
-    fn segment(&self, exc: &Excitation, t_ref: f64) -> Segment<'_> {
-        Segment {
-            sys: &self.sys,
-            mode: &self.mode,
-            dynamics: &self.dynamics,
-            exc: *exc,
-            rk: StructureRk4::new(&self.sys, &self.dynamics, exc, t_ref),
-            t0: self.t,
-            ag0: exc.at(self.t - t_ref).0,
-            u: &self.u,
-            v: &self.v,
-        }
     }
 
     /// Takes the step of length `h` that ends with the structure's cluster at

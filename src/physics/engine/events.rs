@@ -1,75 +1,8 @@
-//! Stick/slip events: the guards of a step's segment, firing a contact and
-//! resolving the mode (for every path), and the step-end switching step of
-//! the RK4 baseline (solver 2).
+//! Stick/slip events: the guards at the current instant, firing a contact
+//! and resolving the mode (for every path), and the step-end switching step
+//! of the RK4 baseline (solver 2).
 
 use super::*;
-
-/// One step's frozen ingredients: the mode, the excitation, and every
-/// body's state at the step start `t0`.
-///
-/// Only the structure's cluster is integrated by RK4 stages. Every other
-/// cluster has a constant absolute acceleration in the mode, so RK4 on it
-/// reduces exactly to its Taylor polynomial (u cubic, v quadratic in time)
-/// and RK4's quadrature of its input power `ag v` to Simpson's rule, exact for
-/// that cubic: they are evaluated in closed form at any instant of the step.
-pub(super) struct Segment<'a> {
-    pub(super) sys: &'a System,
-    pub(super) mode: &'a Mode,
-    pub(super) dynamics: &'a Dynamics,
-    pub(super) exc: Excitation,
-    pub(super) rk: StructureRk4,
-    pub(super) t0: f64,
-    pub(super) ag0: f64,
-    pub(super) u: &'a [f64; MAX_BODIES],
-    pub(super) v: &'a [f64; MAX_BODIES],
-}
-
-impl Segment<'_> {
-    pub(super) fn start(&self) -> Structure {
-        [self.u[0], self.v[0], 0.0, 0.0]
-    }
-
-    /// The structure's cluster after one RK4 step of length `tau` from `t0`.
-    pub(super) fn structure_after(&self, tau: f64) -> Structure {
-        self.rk.step(self.t0, self.u[0], self.v[0], tau)
-    }
-
-    /// Velocity of cluster `c` at `t0 + tau`; `x` is the structure's cluster then.
-    #[inline]
-    pub(super) fn velocity(&self, c: usize, x: &Structure, tau: f64) -> f64 {
-        if c == 0 {
-            x[1]
-        } else {
-            let d = self.dynamics;
-            self.v[d.bottom[c]] + tau * (d.accel_const[c] - self.ag0)
-                - 0.5 * tau * tau * self.exc.ag_rate
-        }
-    }
-
-    /// Guard of interface j at `t0 + tau`: positive while its contact state holds.
-    pub(super) fn guard(&self, j: usize, x: &Structure, tau: f64) -> f64 {
-        let d = self.dynamics;
-        match self.mode.contact[j] {
-            Contact::Stuck => {
-                // Same slack as the resolver's consistency check, so that a
-                // stick it accepted starts with a guard >= 0. In a stack with
-                // equal friction coefficients the stick force of a block riding
-                // on a sliding one is exactly mus N; without the slack rounding
-                // alone would make it chatter.
-                let (_, fext) = self.rk.inputs(self.t0 + tau);
-                let load0 = Dynamics::structure_load(self.sys, x[0], x[1], fext);
-                let f = d.force(j, self.mode, load0);
-                mode::stick_capacity(self.sys, j) - f.abs()
-            }
-            Contact::SlipForward | Contact::SlipBackward => {
-                let v_rel = self.velocity(d.cluster_of[j], x, tau)
-                    - self.velocity(d.cluster_of[j - 1], x, tau);
-                self.mode.contact[j].slip_sign() * v_rel
-            }
-            Contact::Free => f64::INFINITY,
-        }
-    }
-}
 
 impl Simulator {
     /// Interfaces whose relative velocity is exactly zero (free ones excluded).
@@ -169,14 +102,27 @@ impl Simulator {
         (self.ag_now, self.fext_now) = exc.at(self.t - t_ref);
     }
 
-    /// Guards of the current mode at the current state (infinite for free
-    /// interfaces and for j > n).
-    pub(super) fn guards_now(&self, exc: &Excitation, t_ref: f64) -> [f64; MAX_BODIES] {
-        let seg = self.segment(exc, t_ref);
-        let x = seg.start();
+    /// Guards of the current mode at the current state and inputs
+    /// (infinite for free interfaces and for j > n): positive while a
+    /// contact state holds. A stick's carries the resolver's consistency
+    /// slack ([`mode::stick_capacity`]), so that a stick it accepted starts
+    /// with a guard >= 0 (in a stack with equal friction a block riding on a
+    /// sliding one has |F| = mus N exactly; rounding alone would chatter).
+    pub(super) fn guards_now(&self) -> [f64; MAX_BODIES] {
+        let load0 = self.load0();
         let mut g = [f64::INFINITY; MAX_BODIES];
         for (j, gj) in g.iter_mut().enumerate().take(self.sys.n + 1).skip(1) {
-            *gj = seg.guard(j, &x, 0.0);
+            let c = self.mode.contact[j];
+            *gj = match c {
+                Contact::Stuck => {
+                    let f = self.dynamics.force(j, &self.mode, load0);
+                    mode::stick_capacity(&self.sys, j) - f.abs()
+                }
+                Contact::SlipForward | Contact::SlipBackward => {
+                    c.slip_sign() * (self.v[j] - self.v[j - 1])
+                }
+                Contact::Free => f64::INFINITY,
+            };
         }
         g
     }
@@ -191,7 +137,7 @@ impl Simulator {
         forced: u32,
     ) -> bool {
         self.take_inputs_now(exc, t_ref);
-        let g = self.guards_now(exc, t_ref);
+        let g = self.guards_now();
         let (mut slip_zeroed, mut must_break) = (0, 0);
         for j in 1..=self.sys.n {
             let hit = forced & (1 << j) != 0 || (candidates & (1 << j) != 0 && g[j] <= 0.0);
@@ -241,7 +187,8 @@ impl Simulator {
     /// One internal step to `t1` switching modes only at its end (baseline).
     pub(super) fn step_switch_at_end(&mut self, t1: f64, exc: &Excitation, t_ref: f64) {
         let h = t1 - self.t;
-        let x1 = self.segment(exc, t_ref).structure_after(h);
+        let rk = StructureRk4::new(&self.sys, &self.dynamics, exc, t_ref);
+        let x1 = rk.step(self.t, self.u[0], self.v[0], h);
         self.accept(&x1, h, exc, t_ref);
         self.t = t1;
         let all = self.all_interfaces();
