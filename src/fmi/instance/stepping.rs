@@ -461,7 +461,8 @@ impl Instance {
             Err(s) => return s,
         };
         for (slot, &unknown) in out.iter_mut().zip(&unknown_ids) {
-            let mut sum = 0.0;
+            // -0.0: the identity of IEEE addition (a single term comes out unchanged).
+            let mut sum = -0.0;
             for (&known, &dv) in known_ids.iter().zip(seed) {
                 match floor::directional(&o, &params, unknown, known) {
                     Some(d) => sum += d * dv,
