@@ -49,6 +49,7 @@ pub use pieces::{
     ACCURATE_MAX_STEP, EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
     STABLE_H_OMEGA,
 };
+pub use proofs::PRESCRIBED_MAX_STEP;
 pub use report::{Outputs, SimError, Stats};
 use structure_rk4::{move_bodies, upper_cluster_step, Structure, StructureRk4};
 
