@@ -816,7 +816,7 @@ fn floor_table() -> Vec<Variable> {
             "Mass of block {j} (block 1 rests on the support, block j on block j - 1)",
         ));
     }
-    let shared = |make: fn(usize) -> Id| (1..=MAX_BLOCKS).map(move |j| make(j));
+    let shared = |make: fn(usize) -> Id| (1..=MAX_BLOCKS).map(make);
     t.extend(shared(Id::Mus).chain(shared(Id::Muk)).map(from_storey));
     t.extend([Id::RecordFile, Id::RecordScale].map(from_storey));
     t.push(own(

@@ -49,8 +49,8 @@ pub fn public_error(p: &Params, e: ParamError) -> ParamError {
 /// The block masses of a StackOnFloor scene (kg), index j - 1.
 pub fn masses(p: &Params) -> [f64; MAX_BLOCKS] {
     let mut m = [0.0; MAX_BLOCKS];
-    for j in 0..p.n_blocks {
-        m[j] = p.alpha[j] * p.mp;
+    for (mj, alpha) in m.iter_mut().zip(&p.alpha).take(p.n_blocks) {
+        *mj = alpha * p.mp;
     }
     m
 }
