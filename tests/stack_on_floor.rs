@@ -117,7 +117,7 @@ fn stack_on_floor_is_the_engines_prescribed_support_bit_for_bit() {
         };
         sim.set_support_mobility(mobility).unwrap();
         let now = sim.time();
-        sim.advance(now, &exc).unwrap();
+        // (one advance per step: the jump of ag at its start is the engine's)
         sim.advance(now + H, &exc).unwrap();
         let o = sim.outputs();
         let mut ids = vec![
