@@ -416,7 +416,7 @@ fn mobility_one_over_mp_resolves_modes_as_the_monolithic_structure() {
     // decided differently with mobility 0 (a support that does not yield).
     let mut rng = Rng(0x0b_11e);
     let (mut ambiguous, mut differs_at_zero, mut worst) = (0, 0, 0.0f64);
-    for case in 0..20000 {
+    for case in 0..10000 {
         let n = 1 + case % 8;
         let (ps, pp) = twin_scenes(&mut rng, n);
         let ss = System::new(&ps).unwrap();
