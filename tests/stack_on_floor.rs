@@ -300,17 +300,25 @@ fn directional_derivative_refuses_what_it_does_not_provide() {
         ),
         Status::Error
     );
-    // The storey does not provide them.
-    let (mut storey, log) = common::started(0.0, |_| {});
+    // The storey's: baseShear depends on no input; solver 3 has none.
+    let (mut storey, _) = common::started(0.0, |_| {});
     assert_eq!(
-        storey.directional_derivative(&[Id::BaseShear.vr()], &[Id::Ag.vr()], &[1.0], &mut out),
+        storey.directional_derivative(&[Id::BaseShear.vr()], &[Id::Fext.vr()], &[1.0], &mut out),
+        Status::Ok
+    );
+    assert_eq!(out[0], 0.0);
+    assert_eq!(
+        storey.directional_derivative(&[Id::ApAbs.vr()], &[Id::Mp.vr()], &[1.0], &mut out),
         Status::Error
     );
-    assert!(
-        log.last().contains("not provided by StackedLiveLoad"),
-        "{}",
-        log.last()
+    let (mut storey, log) = common::started(0.0, |inst| {
+        inst.set_integer(&[Id::Solver.vr()], &[3]);
+    });
+    assert_eq!(
+        storey.directional_derivative(&[Id::ApAbs.vr()], &[Id::Fext.vr()], &[1.0], &mut out),
+        Status::Error
     );
+    assert!(log.last().contains("not by solver 3"), "{}", log.last());
 }
 
 /// The dependencies in the generated model descriptions (FMI 2.0 by index,
