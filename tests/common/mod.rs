@@ -558,7 +558,20 @@ impl Exact {
             was_stuck,
             load0,
         };
-        *mode = mode::resolve(&self.sys, &req).mode;
+        let res = mode::resolve(&self.sys, &req);
+        *mode = res.mode;
+        if self.prescribed && self.sys.mobility != 0.0 {
+            // The engine's policy: a mode chosen with the mobility that the
+            // held ag contradicts gives way to the one chosen at ag.
+            let mut held = self.sys.clone();
+            held.mobility = 0.0;
+            let ag = z[2 * m + 1];
+            let kept = res.consistent
+                && mode::violation(&held, &res.mode, zero, ag) <= mode::CONSISTENCY_TOL;
+            if !kept {
+                *mode = mode::resolve(&held, &ResolveRequest { load0: ag, ..req }).mode;
+            }
+        }
     }
 
     /// Input and friction work over a stretch of length `delta` from `a` to
