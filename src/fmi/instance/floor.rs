@@ -118,10 +118,11 @@ pub fn directional(o: &Outputs, p: &Params, unknown: Id, known: Id) -> Option<f6
 /// cluster attached to the support). The engine acts on a jump only: with
 /// `ag` unchanged this changes nothing.
 pub fn take_inputs(sim: &mut Solver, exc: &Excitation, mobility: f64) -> Result<(), SimError> {
-    sim.set_support_mobility(mobility).map_err(|e| SimError::BadInput {
-        name: "supportMobility",
-        value: e.value,
-    })?;
+    sim.set_support_mobility(mobility)
+        .map_err(|e| SimError::BadInput {
+            name: "supportMobility",
+            value: e.value,
+        })?;
     let now = sim.time();
     sim.advance(now, exc)
 }
