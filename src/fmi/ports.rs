@@ -5,43 +5,76 @@
 use crate::fmi::variables::Id;
 use crate::physics::engine::{Excitation, Outputs, SimError, Simulator};
 use crate::physics::mode::{stick_capacity, Contact, Dynamics};
-use crate::physics::solver::Solver;
+use crate::physics::solver::{Solver, Stepper};
+use crate::physics::system::System;
 
 /// How far [`at_step_start`] looks ahead for a switch at the very start of
 /// the next step (s): a switch located again along other internal steps
 /// moves by up to 8e-12 s (measured), so 1e-10 s.
 pub const SWITCH_LOOKAHEAD: f64 = 1e-10;
 
+/// Applies the inputs set for the next step at the current instant, as the
+/// next step (and the outputs before it) takes them: the support's mobility
+/// first (the mode resolution of a prescribed support takes it; a structure
+/// keeps it unused), then, if an input that can change the mode changed,
+/// that input at the instant, where the engine acts on a jump of it (a jump
+/// of `Fext` can break a stick; on a prescribed support a jump of `ag` can
+/// too, and nowhere else can `ag`).
+pub fn take_inputs(sim: &mut Solver, exc: &Excitation, mobility: f64) -> Result<(), SimError> {
+    sim.set_support_mobility(mobility)
+        .map_err(|e| SimError::BadInput {
+            name: "supportMobility",
+            value: e.value,
+        })?;
+    if mode_inputs_changed(sim, exc) {
+        let now = sim.time();
+        sim.advance(now, exc)?;
+    }
+    Ok(())
+}
+
+/// Whether `exc` changes an input that can change the mode at an instant
+/// (the ones the engine checks for a jump as a piece begins): `Fext`, and
+/// `ag` on a prescribed support (only the exact engine has one).
+fn mode_inputs_changed(sim: &Solver, exc: &Excitation) -> bool {
+    exc.fext != sim.fext_now()
+        || matches!(sim, Solver::Exact(s) if s.system().prescribed() && exc.ag != s.ag_now())
+}
+
 /// The solver as the next step starts: the inputs set for it applied at the
-/// current instant (a jump of `Fext` can break a stick; `ag` cannot), and a
-/// switch that the next step takes at its very start taken. (A step that ends
-/// on a switch, as when a master lands on `tSwitch`, may leave it, within
-/// rounding, to the next step: the solver is then taken SWITCH_LOOKAHEAD
-/// ahead, past it, which changes a state of frequency w by a relative w 1e-10.)
-pub fn at_step_start(sim: &Solver, exc: &Excitation) -> Result<Solver, SimError> {
+/// current instant ([`take_inputs`]), and a switch that the next step takes
+/// at its very start taken. (A step that ends on a switch, as when a master
+/// lands on `tSwitch`, may leave it, within rounding, to the next step: the
+/// solver is then taken SWITCH_LOOKAHEAD ahead, past it, which changes a
+/// state of frequency w by a relative w 1e-10.) Both models: the storey
+/// (whose `mobility` is 0, unused) and StackOnFloor.
+pub fn at_step_start(sim: &Solver, exc: &Excitation, mobility: f64) -> Result<Solver, SimError> {
     Ok(match sim {
-        Solver::Exact(s) => Solver::Exact(exact_at_step_start(s, exc)?),
+        Solver::Exact(s) => Solver::Exact(exact_at_step_start(s, exc, mobility)?),
         // The regularized method has no switches: only the jump to apply.
-        Solver::Regularized(s) => {
-            let mut next = s.clone();
-            if exc.fext != next.fext_now() {
-                next.advance(next.time(), exc)?;
-            }
-            Solver::Regularized(next)
+        Solver::Regularized(_) => {
+            let mut next = sim.clone();
+            take_inputs(&mut next, exc, mobility)?;
+            next
         }
     })
 }
 
 /// [`at_step_start`] for the exact engine.
-pub fn exact_at_step_start(sim: &Simulator, exc: &Excitation) -> Result<Simulator, SimError> {
-    let mut next = sim.clone();
-    let now = next.time();
-    if exc.fext != next.fext_now() {
-        next.advance(now, exc)?;
-    }
+pub fn exact_at_step_start(
+    sim: &Simulator,
+    exc: &Excitation,
+    mobility: f64,
+) -> Result<Simulator, SimError> {
+    let mut next = Solver::Exact(sim.clone());
+    take_inputs(&mut next, exc, mobility)?;
+    let Solver::Exact(next) = next else {
+        unreachable!("an exact solver stays exact")
+    };
     if !switch_may_be_imminent(&next, exc, 100.0 * SWITCH_LOOKAHEAD) {
         return Ok(next);
     }
+    let now = next.time();
     let mut ahead = next.clone();
     ahead.watch_switches();
     ahead.advance(now + SWITCH_LOOKAHEAD, exc)?;
@@ -50,6 +83,26 @@ pub fn exact_at_step_start(sim: &Simulator, exc: &Excitation) -> Result<Simulato
     } else {
         ahead
     })
+}
+
+/// Absolute acceleration of the structure's cluster (body 0's: the
+/// structure's, or a prescribed support's) and its first two time
+/// derivatives, in the mode of `d`, at the state `o` and the inputs `exc` (at
+/// the instant, with their slopes; linear over a step). The engine's rules:
+/// the acceleration is [`Dynamics::accel0`] of [`Dynamics::load0`]; forces
+/// move it by their rate over `M0` (`inv_mass0`: `Fext`, the spring and the
+/// damper of a structure) and `ag` by its share `ag_gain` (as the engine's
+/// `accel_and_jerk`). On a structure `ag_gain = 0`; on a prescribed support
+/// `k = c = inv_mass0 = 0`, so the acceleration follows `ag`: `ag`,
+/// `der(ag)`, 0.
+fn structure_accel(s: &System, d: &Dynamics, o: &Outputs, exc: &Excitation) -> [f64; 3] {
+    let (k, c) = (s.k, s.c);
+    let acc0 = d.accel0(Dynamics::load0(s, o.up, o.vp, exc.ag, exc.fext));
+    let rel0 = acc0 - exc.ag;
+    let acc0_1 = (exc.fext_rate - k * o.vp - c * rel0) * d.inv_mass0 + exc.ag_rate * d.ag_gain;
+    let rel0_1 = acc0_1 - exc.ag_rate;
+    let acc0_2 = (-k * rel0 - c * rel0_1) * d.inv_mass0;
+    [acc0, acc0_1, acc0_2]
 }
 
 /// Whether a guard of the current mode could reach zero within `horizon`
@@ -63,8 +116,7 @@ fn switch_may_be_imminent(next: &Simulator, exc: &Excitation, horizon: f64) -> b
     let o = next.outputs();
     // The structure's cluster: absolute acceleration and its rate (as in
     // `derivatives`); every other cluster's is constant.
-    let a0 = d.accel0(exc.fext - s.k * o.up - s.c * o.vp);
-    let jerk0 = (exc.fext_rate - s.k * o.vp - s.c * (a0 - exc.ag)) * d.inv_mass0;
+    let [a0, jerk0, _] = structure_accel(s, &d, &o, exc);
     let velocity = |i: usize| if i == 0 { o.vp } else { o.vb[i - 1] };
     let accel = |i: usize| match d.cluster_of[i] {
         0 => a0,
@@ -86,8 +138,12 @@ fn switch_may_be_imminent(next: &Simulator, exc: &Excitation, horizon: f64) -> b
 
 /// The outputs as the next step starts (see [`at_step_start`]); the switch
 /// counters are those of the steps taken, which have not seen the new inputs.
-pub fn outputs_at_step_start(sim: &Solver, exc: &Excitation) -> Result<Outputs, SimError> {
-    let mut o = with_jump_in_peak(at_step_start(sim, exc)?.outputs());
+pub fn outputs_at_step_start(
+    sim: &Solver,
+    exc: &Excitation,
+    mobility: f64,
+) -> Result<Outputs, SimError> {
+    let mut o = with_jump_in_peak(at_step_start(sim, exc, mobility)?.outputs());
     let taken = sim.outputs();
     o.n_events = taken.n_events;
     o.n_ambiguous = taken.n_ambiguous;
@@ -95,7 +151,8 @@ pub fn outputs_at_step_start(sim: &Solver, exc: &Excitation) -> Result<Outputs, 
 }
 
 /// The running peak of |apAbs| includes its value now: a jump of `Fext`
-/// makes `apAbs` jump at the communication point.
+/// (of `ag` on a prescribed support) makes `apAbs` jump at the
+/// communication point.
 fn with_jump_in_peak(mut o: Outputs) -> Outputs {
     o.peak_ap_abs = o.peak_ap_abs.max(o.ap_abs.abs());
     o
@@ -129,10 +186,15 @@ pub(crate) fn running_peak(peak: f64, x: f64, x1: f64, x2: f64, slack: f64) -> [
 /// current instant and their slopes. Entries that are not derivatives of
 /// continuous outputs (`stuck`, counters) are left at their defaults.
 ///
-/// In a mode, every cluster but the structure's has a constant absolute
-/// acceleration; the structure's is `(F_slip + load) / M0` with
-/// `load = Fext - k u0 - c v0`, whose derivatives follow from the state and
-/// the inputs (`Fext` is linear over a step: its second derivative is 0).
+/// Both models: in a mode, every cluster but the structure's (body 0's) has
+/// a constant absolute acceleration; the structure's is `(F_slip + load) /
+/// M0` with `load = Fext - k u0 - c v0` on a structure, `ag` on a prescribed
+/// support (StackOnFloor: `up`, `vp` and the structure's outputs are 0
+/// there), whose derivatives follow from the state and the inputs
+/// ([`structure_accel`]; the inputs are linear over a step). `floorForce =
+/// slidingForce - attachedMass A0` follows body 0's cluster while
+/// interface 1 is stuck (else `attachedMass = 0`); `attachedMass` and
+/// `slidingForce` are constant in a mode.
 pub fn derivatives(next: &Simulator, exc: &Excitation) -> [Outputs; 2] {
     let s = next.system();
     let mode = next.mode();
@@ -142,11 +204,9 @@ pub fn derivatives(next: &Simulator, exc: &Excitation) -> [Outputs; 2] {
     let (ag, ag1) = (exc.ag, exc.ag_rate);
 
     // The structure's cluster: absolute acceleration and its derivatives.
-    let acc0 = d.accel0(exc.fext - k * o.up - c * o.vp);
+    let [acc0, acc0_1, acc0_2] = structure_accel(s, &d, &o, exc);
     let rel0 = acc0 - ag;
-    let acc0_1 = (exc.fext_rate - k * o.vp - c * rel0) * d.inv_mass0;
     let rel0_1 = acc0_1 - ag1;
-    let acc0_2 = (-k * rel0 - c * rel0_1) * d.inv_mass0;
     // Every body i = 0..=n: velocity relative to the support, absolute
     // acceleration and its two derivatives.
     let velocity = |i: usize| if i == 0 { o.vp } else { o.vb[i - 1] };
@@ -211,11 +271,13 @@ pub fn derivatives(next: &Simulator, exc: &Excitation) -> [Outputs; 2] {
     }
     d1.e_friction = d1.e_friction_of.iter().sum();
     d2.e_friction = d2.e_friction_of.iter().sum();
+    [d1.floor_force, d2.floor_force] = [-o.attached_mass * acc0_1, -o.attached_mass * acc0_2];
     [d1, d2]
 }
 
 /// Derivative of the storey's output `unknown` with respect to input `known`
-/// within the mode of `next` (a simulator from [`exact_at_step_start`]),
+/// within the mode of `next` (a simulator from [`exact_at_step_start`]; a
+/// StackOnFloor's are `floor::directional`'s),
 /// whose outputs at the communication point are `o`; `None` if `unknown` is
 /// not a Real output or `known` not an input of the storey.
 ///

@@ -218,6 +218,12 @@ impl Simulator {
         self.fext_now
     }
 
+    /// The ground (on a prescribed support: the support's) acceleration
+    /// now, as the last call left it (m/s2).
+    pub fn ag_now(&self) -> f64 {
+        self.ag_now
+    }
+
     /// Time of the latest mode switch (NaN before the first).
     pub fn last_event_time(&self) -> f64 {
         self.last_event

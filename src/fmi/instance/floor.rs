@@ -1,21 +1,18 @@
 //! StackOnFloor over the engine: the scene of a stack on a prescribed
 //! support (the engine's [`Support::Prescribed`]: block j's mass is
 //! `alpha[j-1] * mp`, so the FMU sets `mp = 1 kg` and `alpha[j-1] = m[j]`),
-//! the support's mobility, the outputs only this model has, and their
-//! derivatives: with respect to time (fmi2GetRealOutputDerivatives) and to
-//! the inputs (fmi2GetDirectionalDerivative).
+//! and the derivatives of its outputs with respect to its inputs
+//! (fmi2GetDirectionalDerivative).
 //!
-//! In a mode, the cluster stuck to the support (blocks 1..=top, interfaces
-//! 1..=top stuck) moves with it: its absolute acceleration is `ag`; every
-//! other cluster has a constant absolute acceleration. So, with `ag` linear
-//! over a step, every output's derivative follows from the outputs, the
-//! masses and `ag`, `der(ag)` (docs/coupling-ports.md).
+//! The rest is the storey's rules, which the engine's make hold for a
+//! support too ([`crate::fmi::ports`]): the inputs taken and the outputs as
+//! the next step starts ([`crate::fmi::ports::take_inputs`],
+//! [`crate::fmi::ports::at_step_start`]), and their time derivatives
+//! ([`crate::fmi::ports::derivatives`]).
 
-use crate::fmi::ports::SWITCH_LOOKAHEAD;
 use crate::fmi::variables::Id;
-use crate::physics::engine::{Excitation, Outputs, SimError};
+use crate::physics::engine::Outputs;
 use crate::physics::params::{ParamError, Params, Support, MAX_BLOCKS};
-use crate::physics::solver::{Solver, Stepper};
 
 /// The default scene: 2 blocks of [`crate::fmi::variables::FLOOR_DEFAULT_MASS`],
 /// the storey's default friction.
@@ -111,100 +108,4 @@ pub fn directional(o: &Outputs, p: &Params, unknown: Id, known: Id) -> Option<f6
         | Id::TSwitch => 0.0,
         _ => return None,
     })
-}
-
-/// Applies the inputs set for the next step at the current instant: the
-/// support's mobility, and `ag` (a jump of it can break a stick of the
-/// cluster attached to the support). The engine acts on a jump only: with
-/// `ag` unchanged this changes nothing.
-pub fn take_inputs(sim: &mut Solver, exc: &Excitation, mobility: f64) -> Result<(), SimError> {
-    sim.set_support_mobility(mobility)
-        .map_err(|e| SimError::BadInput {
-            name: "supportMobility",
-            value: e.value,
-        })?;
-    let now = sim.time();
-    sim.advance(now, exc)
-}
-
-/// The solver as the next step starts (as [`crate::fmi::ports::at_step_start`]
-/// for the storey): the inputs set for it taken at the current instant, and a
-/// switch that the next step takes at its very start taken (looked for
-/// [`SWITCH_LOOKAHEAD`] ahead).
-pub fn at_step_start(sim: &Solver, exc: &Excitation, mobility: f64) -> Result<Solver, SimError> {
-    let mut next = sim.clone();
-    take_inputs(&mut next, exc, mobility)?;
-    let mut ahead = next.clone();
-    ahead.watch_switches();
-    ahead.advance(next.time() + SWITCH_LOOKAHEAD, exc)?;
-    Ok(if ahead.first_switch().is_nan() {
-        next
-    } else {
-        ahead
-    })
-}
-
-/// First and second time derivatives of every continuous output of a
-/// StackOnFloor in the state `o` (from [`at_step_start`]: the mode the next
-/// step starts in) under the excitation `exc` of that step (`ag` now and its
-/// slope). The attached cluster moves with the support (absolute
-/// acceleration `ag`, derivative `der(ag)`); every other cluster has a
-/// constant absolute acceleration; `ag` is linear over a step. Entries that
-/// are not derivatives of continuous outputs are left at 0.
-pub fn derivatives(o: &Outputs, p: &Params, exc: &Excitation) -> [Outputs; 2] {
-    let n = p.n_blocks;
-    let m = masses(p);
-    let top = attached_top(o, n);
-    let (ag, ag1) = (exc.ag, exc.ag_rate);
-    // Body i = 0 (the support) ..= n: velocity relative to the support,
-    // absolute acceleration and its derivative.
-    let velocity = |i: usize| if i == 0 { 0.0 } else { o.vb[i - 1] };
-    let accel = |i: usize| match i {
-        0 => [ag, ag1],
-        i if i <= top => [o.ab_abs[i - 1], ag1],
-        i => [o.ab_abs[i - 1], 0.0],
-    };
-    let (mut d1, mut d2) = (Outputs::default(), Outputs::default());
-    // A running peak is taken in continuous time between steps, to the
-    // engine's accuracy (as ports::derivatives).
-    const ROUNDING: f64 = 1e-9;
-    let (mut p0, mut p1, mut ek1, mut ek2) = (0.0, 0.0, 0.0, 0.0);
-    for j in 1..=n {
-        let b = j - 1;
-        let (a, below) = (accel(j), accel(j - 1));
-        let (v, rel, rel1) = (velocity(j), a[0] - ag, a[1] - ag1);
-        let (v_rel, a_rel) = (v - velocity(j - 1), a[0] - below[0]);
-        [d1.ub[b], d2.ub[b]] = [v, rel];
-        [d1.vb[b], d2.vb[b]] = [rel, rel1];
-        [d1.slip[b], d2.slip[b]] = [v_rel, a_rel];
-        [d1.ab_abs[b], d2.ab_abs[b]] = [a[1], 0.0];
-        // A stuck interface of the attached cluster carries M_{j..top} ag
-        // plus a constant; any other a constant.
-        let mass_above: f64 = if j <= top {
-            m[b..top].iter().rev().sum()
-        } else {
-            0.0
-        };
-        d1.force[b] = mass_above * ag1;
-        let f = o.force[b];
-        d1.e_friction_of[b] = -f * v_rel;
-        d2.e_friction_of[b] = -(d1.force[b] * v_rel + f * a_rel);
-        let body = |i: usize| if i == 0 { 0.0 } else { o.ub[i - 1] };
-        let slack = ROUNDING * (o.peak_slip[b] + body(j).abs() + body(j - 1).abs());
-        [d1.peak_slip[b], d2.peak_slip[b]] =
-            crate::fmi::ports::running_peak(o.peak_slip[b], o.slip[b], v_rel, a_rel, slack);
-        p0 += m[b] * v;
-        p1 += m[b] * rel;
-        ek1 += m[b] * v * rel;
-        ek2 += m[b] * (rel * rel + v * rel1);
-    }
-    [d1.e_kinetic, d2.e_kinetic] = [ek1, ek2];
-    // Input energy in relative coordinates: -integral(sum m_j ag v_j dt).
-    d1.e_input = -ag * p0;
-    d2.e_input = -ag1 * p0 - ag * p1;
-    d1.e_friction = d1.e_friction_of.iter().sum();
-    d2.e_friction = d2.e_friction_of.iter().sum();
-    // floorForce = slidingForce - attachedMass ag.
-    d1.floor_force = -o.attached_mass * ag1;
-    [d1, d2]
 }

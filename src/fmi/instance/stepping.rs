@@ -26,20 +26,7 @@ impl Instance {
         if self.outputs.is_none() {
             let exc = self.next_excitation();
             let sim = self.d.sim.as_ref().expect("built above");
-            let at_start = match self.model {
-                Model::Storey => ports::outputs_at_step_start(sim, &exc),
-                Model::Floor => {
-                    floor::at_step_start(sim, &exc, self.d.support_mobility).map(|next| {
-                        // The counters of the steps taken, as the storey's.
-                        let taken = sim.outputs();
-                        Outputs {
-                            n_events: taken.n_events,
-                            n_ambiguous: taken.n_ambiguous,
-                            ..next.outputs()
-                        }
-                    })
-                }
-            };
+            let at_start = ports::outputs_at_step_start(sim, &exc, self.d.support_mobility);
             let outputs = match at_start {
                 Ok(o) => o,
                 Err(e) => return Err(self.error(func, e.to_string())),
@@ -93,13 +80,11 @@ impl Instance {
         }
         let exc = self.next_excitation();
         let derivatives = match &self.d.sim {
-            Some(sim) if self.model == Model::Floor => {
-                match floor::at_step_start(sim, &exc, self.d.support_mobility) {
-                    Ok(next) => floor::derivatives(&next.outputs(), &self.d.values.params, &exc),
-                    Err(e) => return self.error(F, e.to_string()),
-                }
-            }
-            Some(Solver::Exact(sim)) => match ports::exact_at_step_start(sim, &exc) {
+            Some(Solver::Exact(sim)) => match ports::exact_at_step_start(
+                sim,
+                &exc,
+                self.d.support_mobility,
+            ) {
                 Ok(next) => ports::derivatives(&next, &exc),
                 Err(e) => return self.error(F, e.to_string()),
             },
@@ -290,11 +275,7 @@ impl Instance {
         }
         // A jump of an input acts at the communication point, where the
         // outputs already showed it: tSwitch watches for switches after it.
-        let jump = match self.model {
-            Model::Floor => floor::take_inputs(sim, &at_start, self.d.support_mobility),
-            Model::Storey if at_start.fext != sim.fext_now() => sim.advance(sim.time(), &at_start),
-            Model::Storey => Ok(()),
-        };
+        let jump = ports::take_inputs(sim, &at_start, self.d.support_mobility);
         let result = jump.and_then(|()| {
             sim.watch_switches();
             match &self.record {
@@ -458,7 +439,8 @@ impl Instance {
         let storey = match (self.model, &self.d.sim) {
             (Model::Floor, _) => None,
             (Model::Storey, Some(Solver::Exact(sim))) => {
-                match ports::exact_at_step_start(sim, &self.next_excitation()) {
+                let exc = self.next_excitation();
+                match ports::exact_at_step_start(sim, &exc, self.d.support_mobility) {
                     Ok(next) => Some(next),
                     Err(e) => return self.error(F, e.to_string()),
                 }
