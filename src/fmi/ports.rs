@@ -275,33 +275,38 @@ pub fn derivatives(next: &Simulator, exc: &Excitation) -> [Outputs; 2] {
     [d1, d2]
 }
 
-/// Derivative of the storey's output `unknown` with respect to input `known`
-/// within the mode of `next` (a simulator from [`exact_at_step_start`]; a
-/// StackOnFloor's are `floor::directional`'s),
-/// whose outputs at the communication point are `o`; `None` if `unknown` is
-/// not a Real output or `known` not an input of the storey.
+/// Derivative of output `unknown` with respect to input `known` within the
+/// mode of `next` (a simulator from [`exact_at_step_start`]), whose outputs at
+/// the communication point are `o`; `None` if `unknown` is not a Real output
+/// or `known` not an input. One rule for both models:
 ///
-/// Nothing depends on `ag` at once (docs/coupling-ports.md). `Fext` acts on
-/// the structure's cluster (mass `M0`): its absolute acceleration moves by
-/// `1/M0` per newton, so `d apAbs/d Fext = 1/M0` (the mobility of the storey's
-/// floor, which a StackOnFloor on it takes as `supportMobility`),
-/// `d abAbs[j]/d Fext = 1/M0` for a block of that cluster, `d F[j]/d Fext =
-/// M_above,j / M0` for a stuck interface in it; `d peakApAbs/d Fext` is
-/// `sign(apAbs)/M0` while `|apAbs|` is the running peak (the branch of the
-/// max that holds it), else 0; every other output: 0.
+/// An input moves only the structure's (or support's) cluster at once: by
+/// `1/M0` per newton of `Fext` on a storey (`inv_mass0`), by 1 per m/s2 of
+/// `ag` on a prescribed support (`ag_gain`; on a storey `ag` moves no absolute
+/// acceleration, docs/coupling-ports.md). With that cluster's share `a`:
+/// `d apAbs = a` (the storey's `1/M0` is the mobility of its floor, which a
+/// StackOnFloor on it takes as `supportMobility`), `d abAbs[j] = a` for a
+/// block of the cluster, `d F[j] = M_above,j a` for a stuck interface in it,
+/// `d floorForce = -attachedMass a`; `d peakApAbs = sign(apAbs) a` while
+/// `|apAbs|` is the running peak (the branch of the max that holds it);
+/// `supportMobility` only enters the choice of a mode at a switch (0);
+/// every other output (state, constant in a mode): 0.
 pub fn directional(next: &Simulator, o: &Outputs, unknown: Id, known: Id) -> Option<f64> {
-    if !matches!(known, Id::Ag | Id::Fext) {
-        return None;
-    }
     let (s, mode) = (next.system(), next.mode());
     let d = Dynamics::new(s, mode);
-    let per_newton = if known == Id::Fext { d.inv_mass0 } else { 0.0 };
+    let share = match known {
+        Id::Fext => d.inv_mass0,
+        Id::Ag => d.ag_gain,
+        Id::SupportMobility => 0.0,
+        _ => return None,
+    };
     let in_structure = |j: usize| j <= s.n && d.cluster_of[j] == 0;
     Some(match unknown {
-        Id::ApAbs => per_newton,
-        Id::PeakApAbs if o.ap_abs.abs() >= o.peak_ap_abs => o.ap_abs.signum() * per_newton,
-        Id::AbAbs(j) if in_structure(j) => per_newton,
-        Id::F(j) if in_structure(j) && mode.is_stuck(j) => d.force_affine(j, mode).0 * per_newton,
+        Id::ApAbs => share,
+        Id::PeakApAbs if o.ap_abs.abs() >= o.peak_ap_abs => o.ap_abs.signum() * share,
+        Id::AbAbs(j) if in_structure(j) => share,
+        Id::F(j) if in_structure(j) && mode.is_stuck(j) => d.force_affine(j, mode).0 * share,
+        Id::FloorForce => -d.attached_mass(mode) * share,
         Id::Up
         | Id::Vp
         | Id::BaseShear
@@ -313,6 +318,8 @@ pub fn directional(next: &Simulator, o: &Outputs, unknown: Id, known: Id) -> Opt
         | Id::Eviscous
         | Id::Efriction
         | Id::TSwitch
+        | Id::AttachedMass
+        | Id::SlidingForce
         | Id::AbAbs(_)
         | Id::F(_)
         | Id::Ub(_)

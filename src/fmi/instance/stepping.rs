@@ -4,7 +4,7 @@
 //! fmi2GetRealStatus (`fmi2LastSuccessfulTime`).
 
 use super::values::{name_of, real_output};
-use super::{floor, Instance, Phase, Status};
+use super::{Instance, Phase, Status};
 use crate::fmi::ports;
 use crate::fmi::variables::{Causality, Id, Model};
 use crate::ground::record;
@@ -353,8 +353,7 @@ impl Instance {
     /// fmi2GetDirectionalDerivative (and fmi3GetDirectionalDerivative):
     /// `out[i] = sum_k d unknowns[i] / d knowns[k] * seed[k]` at the current
     /// communication point, in the mode the next step starts in, for Real
-    /// outputs with respect to inputs ([`floor::directional`],
-    /// [`ports::directional`]). `seed` has one entry per known, `out` one
+    /// outputs with respect to inputs ([`ports::directional`]). `seed` has one entry per known, `out` one
     /// per unknown.
     pub fn directional_derivative(
         &mut self,
@@ -430,22 +429,20 @@ impl Instance {
                 ),
             );
         }
-        let params = self.d.values.params.clone();
         let o = match self.current_outputs(F) {
             Ok(o) => o.clone(),
             Err(s) => return s,
         };
-        // The storey: in the mode the next step starts in, as its outputs.
-        let storey = match (self.model, &self.d.sim) {
-            (Model::Floor, _) => None,
-            (Model::Storey, Some(Solver::Exact(sim))) => {
+        // In the mode the next step starts in, as the outputs.
+        let next = match &self.d.sim {
+            Some(Solver::Exact(sim)) => {
                 let exc = self.next_excitation();
                 match ports::exact_at_step_start(sim, &exc, self.d.support_mobility) {
-                    Ok(next) => Some(next),
+                    Ok(next) => next,
                     Err(e) => return self.error(F, e.to_string()),
                 }
             }
-            (Model::Storey, _) => {
+            _ => {
                 return self.error(
                     F,
                     "directional derivatives are provided by solvers 1 and 2, not by solver 3 \
@@ -457,11 +454,7 @@ impl Instance {
             // -0.0: the identity of IEEE addition (a single term comes out unchanged).
             let mut sum = -0.0;
             for (&known, &dv) in known_ids.iter().zip(seed) {
-                let derivative = match &storey {
-                    Some(next) => ports::directional(next, &o, unknown, known),
-                    None => floor::directional(&o, &params, unknown, known),
-                };
-                match derivative {
+                match ports::directional(&next, &o, unknown, known) {
                     Some(d) => sum += d * dv,
                     None => {
                         return self.error(
