@@ -576,8 +576,20 @@ impl Exact {
         let n = m - 1;
         let mut must_break = 0u32;
         let mut joined = vec![false; m];
+        // At a jump (`located` 0) on a prescribed support, a slip at zero
+        // relative velocity whose relative acceleration still goes its way
+        // goes on (it has just started; the engine's `violated_at_jump`).
+        let (a_now, _) = self.chain_full(mode, z[0], z[m], z[2 * m + 3], z[2 * m + 1]);
+        let goes_on = |j: usize| {
+            let c = mode.contact[j];
+            located == 0
+                && self.prescribed
+                && matches!(c, Contact::SlipForward | Contact::SlipBackward)
+                && z[m + j] == z[m + j - 1]
+                && c.slip_sign() * (a_now[j] - a_now[j - 1]) >= 0.0
+        };
         for j in 1..=n {
-            if j == located || self.guard(mode, z, j) <= 0.0 {
+            if j == located || (self.guard(mode, z, j) <= 0.0 && !goes_on(j)) {
                 match mode.contact[j] {
                     Contact::Stuck => must_break |= 1 << j,
                     Contact::Free => {}
