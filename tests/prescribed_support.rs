@@ -986,7 +986,11 @@ impl Storey {
 
 /// The ground's value and slope at `t` and the end of its sample interval.
 fn ground_piece(gm: &GroundMotion, t: f64) -> (f64, f64, f64) {
-    let i = gm.time.partition_point(|&x| x <= t).clamp(1, gm.time.len() - 1) - 1;
+    let i = gm
+        .time
+        .partition_point(|&x| x <= t)
+        .clamp(1, gm.time.len() - 1)
+        - 1;
     let (t0, t1) = (gm.time[i], gm.time[i + 1]);
     let rate = (gm.accel[i + 1] - gm.accel[i]) / (t1 - t0);
     (gm.accel[i] + rate * (t - t0), rate, t1)
@@ -1052,7 +1056,10 @@ fn cosimulate(
         let ts = stack.first_switch();
         // A switch at the step's start would be one the previous step's
         // end left undone (the stack settles its switches there).
-        assert!(!(ts <= t), "H {h}: a switch at the start of the step at {t}");
+        assert!(
+            !(ts <= t),
+            "H {h}: a switch at the start of the step at {t}"
+        );
         let t1 = if ts.is_finite() && ts > t && ts < target {
             stack = saved;
             stack.advance(ts, &exc).unwrap();
@@ -1141,7 +1148,10 @@ fn a_cosimulation_with_mobility_one_over_mp_converges_to_the_monolithic_solution
     // The switches compared: those before 3.95 s (the last, at 3.992 s,
     // falls after the record's end at the coarsest H).
     let before = |s: &[(f64, Mode)]| -> Vec<(f64, Mode)> {
-        s.iter().copied().filter(|x| x.0 < duration - 0.05).collect()
+        s.iter()
+            .copied()
+            .filter(|x| x.0 < duration - 0.05)
+            .collect()
     };
     let mono_switches: Vec<(f64, Mode, bool)> = mono_switches
         .into_iter()
@@ -1169,7 +1179,10 @@ fn a_cosimulation_with_mobility_one_over_mp_converges_to_the_monolithic_solution
         assert!(
             same_modes,
             "H {h}: co-simulation modes {:?}\n monolithic {:?}",
-            switches.iter().map(|s| (s.0, s.1.contact[1])).collect::<Vec<_>>(),
+            switches
+                .iter()
+                .map(|s| (s.0, s.1.contact[1]))
+                .collect::<Vec<_>>(),
             mono_switches
                 .iter()
                 .map(|s| (s.0, s.1.contact[1], s.2))
@@ -1200,12 +1213,179 @@ fn a_cosimulation_with_mobility_one_over_mp_converges_to_the_monolithic_solution
             assert!(fine < coarse / 2.5, "error {k}: {coarse:.2e} -> {fine:.2e}");
         }
     }
-    assert!(errors[6][0] < 1e-6 && errors[6][1] < 1e-5, "{:?}", errors[6]);
+    assert!(
+        errors[6][0] < 1e-6 && errors[6][1] < 1e-5,
+        "{:?}",
+        errors[6]
+    );
     // A floor that does not yield to the stack takes other continuations.
     let (_, _, switches0, _) = cosimulate(&p, &gm, 0.0025, 0.0);
     let switches0 = before(&switches0);
     let differs = switches0.len() != mono_switches.len()
-        || switches0.iter().zip(&mono_switches).any(|(a, b)| a.1 != b.1);
+        || switches0
+            .iter()
+            .zip(&mono_switches)
+            .any(|(a, b)| a.1 != b.1);
     println!("mobility 0: {} switches", switches0.len());
     assert!(differs, "mobility 0 took the monolithic continuations too");
+}
+
+/// The scenes of the m_b = 0 bit-identity check: 1, 4 and 8 blocks on a
+/// prescribed support under ramps with jumps at random communication
+/// points, each output after the last step as its bits.
+fn mb0_scenario_bits() -> Vec<u64> {
+    let mut state = 0x5eed_0b17_u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut bits = vec![];
+    for n in [1usize, 4, 8] {
+        let mut p = Params {
+            n_blocks: n,
+            mp: 1.0,
+            support: Support::Prescribed,
+            ..Params::default()
+        };
+        for j in 0..n {
+            p.alpha[j] = 1.0 + 99.0 * next();
+            p.mus[j] = 0.03 + 0.37 * next();
+            p.muk[j] = p.mus[j] * (0.6 + 0.4 * next());
+        }
+        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        sim.set_support_mobility(0.0).unwrap();
+        let (mut t, mut ag) = (0.0, 0.0);
+        for _ in 0..200 {
+            let h = 0.002 + 0.048 * next();
+            if next() < 0.3 {
+                ag = -5.0 + 10.0 * next();
+            }
+            let rate = -100.0 + 200.0 * next();
+            t += h;
+            let exc = Excitation {
+                ag,
+                ag_rate: rate,
+                ..Default::default()
+            };
+            sim.advance(t, &exc).unwrap();
+            ag += rate * h;
+        }
+        let o = sim.outputs();
+        bits.extend(
+            [
+                o.e_input,
+                o.e_kinetic,
+                o.e_friction,
+                o.floor_force,
+                o.sliding_force,
+            ]
+            .map(f64::to_bits),
+        );
+        for j in 0..n {
+            bits.extend(
+                [o.ub[j], o.vb[j], o.slip[j], o.peak_slip[j], o.ab_abs[j]].map(f64::to_bits),
+            );
+        }
+        bits.push(o.n_events as u64);
+    }
+    bits
+}
+
+/// [`mb0_scenario_bits`] as the engine before the continuous law gave them
+/// (commit 579ae00, the support held at `ag` with `m_b = 0`).
+const MB0_BITS_BEFORE: [u64; 83] = [
+    0x40595257797f645c,
+    0x3ff0a64f744fbfe2,
+    0x40590fbe3bae255a,
+    0x40325a5c9defae82,
+    0x40325a5c9defae82,
+    0xc01333198b33ba33,
+    0x3fdd0662a7ffb49d,
+    0xc01333198b33ba33,
+    0x4013dbfacfb0b764,
+    0xbffd0510782104e6,
+    0x0000000000000013,
+    0x4091194701add33d,
+    0x4037ddc6b83f6e6c,
+    0x4090b9cfe6ccd583,
+    0xc07c020f5015b3d9,
+    0xc07c020f5015b3d9,
+    0xbff3f517b75e7e7c,
+    0xbfdb88db276d6daf,
+    0xbff3f517b75e7e7c,
+    0x3ff3f517b75e7e7d,
+    0x3ffbcdc8bf6a5bf1,
+    0xbff3f517b75e7e7c,
+    0xbfdb88db276d6daf,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x3ffbcdc8bf6a5bf1,
+    0xbff3f517b75e7e7c,
+    0xbfdb88db276d6daf,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x3ffbcdc8bf6a5bf1,
+    0xbffdecec07a47c04,
+    0xbfdb88db276d6daf,
+    0xbfe3efa8a08bfb10,
+    0x3fe3efa8a08bfb0f,
+    0x3ffbcdc8bf6a5bf1,
+    0x0000000000000029,
+    0x408cb025bea7737e,
+    0x4073dfc979e63813,
+    0x4082c04101b45775,
+    0xc0820b335d91755f,
+    0xc081c3c19abe55d2,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x40210f77c83e0160,
+    0xbfc687dfcb4dfb15,
+    0xbfe5a4f10d4def40,
+    0xbfc687dfcb4dfb15,
+    0x3fc687dfcb4dfb15,
+    0x400fc2b6a44b0e43,
+    0xbffd4c6617265760,
+    0xbff90b1e4326317f,
+    0xbffa7b6a1dbc97fd,
+    0x3ffb93fac6ddc9bc,
+    0x3fec12c7498b8d32,
+    0xbffd4c6617265760,
+    0xbff90b1e4326317f,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x3fec12c7498b8d32,
+    0xbffd4c6617265760,
+    0xbff90b1e4326317f,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x3fec12c7498b8d32,
+    0xbffd4c6617265760,
+    0xbff90b1e4326317f,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x3fec12c7498b8d32,
+    0xbffd4c6617265760,
+    0xbff90b1e4326317f,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x3fec12c7498b8d32,
+    0xbffd4c6617265760,
+    0xbff90b1e4326317f,
+    0x0000000000000000,
+    0x0000000000000000,
+    0x3fec12c7498b8d32,
+    0x0000000000000023,
+];
+
+#[test]
+fn with_mobility_zero_the_results_are_those_before_the_continuous_law_bit_for_bit() {
+    // m_b = 0: g = 1 and c = 0 exactly in every mode, so the law changes
+    // nothing. Expected: the outputs of three scenes (1, 4, 8 blocks,
+    // ramps with jumps) equal bit for bit those the engine gave at commit
+    // 579ae00 (printed there by the same scenario).
+    assert_eq!(mb0_scenario_bits(), MB0_BITS_BEFORE.to_vec());
 }

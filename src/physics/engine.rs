@@ -318,12 +318,8 @@ impl Simulator {
 
     /// Whether the current mode satisfies the contact law (within tolerance).
     pub fn mode_is_consistent(&self) -> bool {
-        mode::violation(
-            &self.sys,
-            &self.mode,
-            self.zero_mask(),
-            self.load0(),
-        ) <= mode::CONSISTENCY_TOL
+        mode::violation(&self.sys, &self.mode, self.zero_mask(), self.load0())
+            <= mode::CONSISTENCY_TOL
     }
 
     /// Advances to `t_end` under an excitation that is linear over

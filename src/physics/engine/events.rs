@@ -187,7 +187,8 @@ impl Simulator {
                 Contact::Stuck if d.cluster_of[j] == 0 => {
                     let f = d.force(j, &self.mode, load0);
                     let cap = mode::stick_capacity(&self.sys, j);
-                    if cap - f.abs() <= 1e-12 * cap && f.signum() * d.mass_above[j] * a0_rate > 0.0 {
+                    if cap - f.abs() <= 1e-12 * cap && f.signum() * d.mass_above[j] * a0_rate > 0.0
+                    {
                         forced |= 1 << j;
                     }
                 }
