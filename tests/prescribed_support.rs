@@ -4,15 +4,22 @@
 //!
 //! Expected values come from:
 //! - the independent exact reference `common::Exact` (full chain, Delassus
-//!   forces with body 0 of infinite mass moving at `ag`, matrix exponentials,
-//!   events by bisection, exact input and friction work): slips, peaks,
-//!   energies within 1e-9;
+//!   forces with body 0 of infinite mass moving at `ag`, or with a mobility
+//!   `m_b` a floor of mass `1 / m_b` pushed by `a_s / m_b - F_ref`, its own
+//!   derivation of the support's law; matrix exponentials, events by
+//!   bisection, exact input, support and friction work): slips, peaks,
+//!   the support's drift, energies within 1e-9;
+//! - the engine before the continuous law (commit 579ae00): `m_b = 0` bit
+//!   for bit;
+//! - the monolithic structure scene: a co-simulation of a storey with the
+//!   stack (`m_b = 1 / mp`) converges to it, through the same continuations;
 //! - identities that hold for any exact solution: momentum balance of the
 //!   floor force, `sliding_force = floor_force + attached_mass a_s`, the
 //!   energy balance, friction work never falling;
 //! - the structure scene itself: the SDOF structure is this scene closed
 //!   over `-F_1` (MODEL.md), checked on random modes and states, and the
-//!   support's mobility `1 / mp` resolves modes as the monolithic model;
+//!   support's mobility `1 / mp` resolves modes as the monolithic model
+//!   (the reference mode being the mode before);
 //! - closed forms in the limits mu -> infinity and mu = 0.
 
 mod common;
