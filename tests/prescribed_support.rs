@@ -240,9 +240,11 @@ fn compare(o: &Outputs, exact: &ExactResult, label: &str) -> f64 {
 fn random_stacks_under_ramps_and_jumps_match_the_exact_reference() {
     // 1..8 blocks, mus >= muk, a_s piecewise linear with jumps at random
     // communication points; half the scenes with a support mobility (the
-    // reference resolves with the same rule, its F_old from its own
-    // Delassus forces). Every step: the per-instant checks and the saved
-    // state accepted; halfway, a saved state continues bit for bit.
+    // reference: its floor of mass 1/m_b pushed by a_s/m_b - F_ref, the
+    // reference mode that of each step's start; the support drifts after
+    // a switch and its drift is compared). Every step: the per-instant
+    // checks and the saved state accepted; halfway, a saved state
+    // continues bit for bit.
     let mut rng = Rng(0x050b_b022);
     let mut worst = 0.0f64;
     let mut checks = Worst::default();
