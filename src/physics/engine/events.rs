@@ -34,12 +34,9 @@ impl Simulator {
             zero: self.zero_mask(),
             must_break,
             was_stuck: self.stuck_mask(),
-            load0: self.resolve_load0(),
+            load0: self.load0(),
         };
-        let mut res = mode::resolve(&self.sys, &req);
-        if self.sys.prescribed() && self.sys.mobility != 0.0 {
-            res = self.held_unless_consistent(res, &req);
-        }
+        let res = mode::resolve(&self.sys, &req);
         self.tries += u64::from(res.tries);
         if !res.consistent {
             self.stats.inconsistent += 1;
@@ -60,28 +57,6 @@ impl Simulator {
             self.dyn_cache
                 .load(&self.sys, &self.mode, &mut self.dynamics);
         }
-    }
-
-    /// On a prescribed support with a mobility: the resolution `res` (taken
-    /// with the mobility), unless the support's own acceleration `ag` —
-    /// which it follows until its inputs change — contradicts its mode (a
-    /// stick `ag` breaks, a slip `ag` turns back): then the resolution of
-    /// the support held at `ag` (mobility 0), a mode `ag` keeps. Without
-    /// this, the contradicted mode would fire again at once, and a very
-    /// mobile support (a floor far lighter than the stack) could switch back
-    /// and forth at one instant.
-    fn held_unless_consistent(&self, res: mode::Resolved, req: &ResolveRequest) -> mode::Resolved {
-        let mut held = self.sys.clone();
-        held.mobility = 0.0;
-        let a_s = self.load0();
-        if res.consistent
-            && mode::violation(&held, &res.mode, req.zero, a_s) <= mode::CONSISTENCY_TOL
-        {
-            return res;
-        }
-        let mut again = mode::resolve(&held, &ResolveRequest { load0: a_s, ..*req });
-        again.tries += res.tries;
-        again
     }
 
     /// Acts on guards that have fired at the current instant: a slipping
@@ -155,6 +130,74 @@ impl Simulator {
             };
         }
         g
+    }
+
+    /// The guards that may fire at a jump of the inputs to `exc` now: all,
+    /// but on a prescribed support a slip at zero relative velocity (one
+    /// that has just started) whose relative acceleration under the new
+    /// inputs still goes its way: it is not a switch, and resolving it
+    /// anew would lose what started it (a stick at its limit, which the
+    /// rule "the most stuck interfaces" would take back). A co-simulation
+    /// that redoes its step up to a switch exchanges its values at that
+    /// very instant: the support's acceleration then jumps by the error of
+    /// the step's extrapolation, and the slip must go on.
+    pub(super) fn violated_at_jump(&mut self, exc: &Excitation) -> u32 {
+        let all = self.all_interfaces();
+        if !self.sys.prescribed() {
+            return all;
+        }
+        self.take_inputs_now(exc, self.t);
+        let load0 = self.load0();
+        let mut candidates = all;
+        for j in 1..=self.sys.n {
+            let c = self.mode.contact[j];
+            let starting = matches!(c, Contact::SlipForward | Contact::SlipBackward)
+                && self.v[j] == self.v[j - 1];
+            if starting && c.slip_sign() * self.dynamics.rel_accel(j, load0) >= 0.0 {
+                candidates &= !(1 << j);
+            }
+        }
+        candidates
+    }
+
+    /// At the end of a call on a prescribed support: a guard at zero up to
+    /// rounding (1e-12 of its scale) that is about to cross fires now,
+    /// not at the start of the next call. A master that redoes its step up
+    /// to a switch it was told of (`first_switch`) then gets the mode after
+    /// it at that communication point, as the monolithic model has it
+    /// there; the exact motion is the same either way.
+    pub(super) fn settle_at_end(&mut self, piece: &Piece) {
+        let (n, d) = (self.sys.n, &self.dynamics);
+        let load0 = self.load0();
+        // The rate of the support cluster's acceleration (prescribed: g ag').
+        let a0_rate = d.ag_gain * piece.exc.ag_rate;
+        let mut forced = 0u32;
+        for j in 1..=n {
+            let c = self.mode.contact[j];
+            match c {
+                Contact::SlipForward | Contact::SlipBackward => {
+                    // Its scale: how far the relative velocity moves over
+                    // a substep.
+                    let (sign, rate) = (c.slip_sign(), d.rel_accel(j, load0));
+                    let g = sign * (self.v[j] - self.v[j - 1]);
+                    if g <= 1e-12 * rate.abs() * self.h_max && sign * rate < 0.0 {
+                        forced |= 1 << j;
+                    }
+                }
+                Contact::Stuck if d.cluster_of[j] == 0 => {
+                    let f = d.force(j, &self.mode, load0);
+                    let cap = mode::stick_capacity(&self.sys, j);
+                    if cap - f.abs() <= 1e-12 * cap && f.signum() * d.mass_above[j] * a0_rate > 0.0
+                    {
+                        forced |= 1 << j;
+                    }
+                }
+                _ => {}
+            }
+        }
+        if forced != 0 {
+            self.fire_violated(&piece.exc, piece.t_ref, 0, forced);
+        }
     }
 
     /// Fires the guards in `forced` and every guard among `candidates`
@@ -248,6 +291,12 @@ impl DynamicsCache {
             k |= (mode.contact[j] as u32) << (2 * j + 2);
         }
         k
+    }
+
+    /// Forgets every entry (their dynamics were built for another reference
+    /// mode or mobility of a prescribed support).
+    pub(super) fn clear(&mut self) {
+        *self = DynamicsCache::default();
     }
 
     /// Sets `out` to the dynamics of `mode`, built if missing.
