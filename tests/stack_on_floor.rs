@@ -116,10 +116,23 @@ fn stack_on_floor_is_the_engines_prescribed_support_bit_for_bit() {
             ..Default::default()
         };
         sim.set_support_mobility(mobility).unwrap();
+        // As fmi2DoStep: the jump of ag at the communication point first (the
+        // mode it gives is the step's reference of the support's law), then
+        // the step; the outputs as the next step starts, as fmi2GetReal
+        // shows them (ports' rule, the inputs held at their ends).
         let now = sim.time();
-        // (one advance per step: the jump of ag at its start is the engine's)
+        sim.advance(now, &exc).unwrap();
         sim.advance(now + H, &exc).unwrap();
-        let o = sim.outputs();
+        let held = Excitation {
+            ag: sim.ag_now(),
+            ..exc
+        };
+        let o = stacked_live_load::fmi::ports::outputs_at_step_start(
+            &stacked_live_load::physics::solver::Solver::Exact(sim.clone()),
+            &held,
+            mobility,
+        )
+        .unwrap();
         let mut ids = vec![
             (Id::FloorForce, o.floor_force),
             (Id::AttachedMass, o.attached_mass),

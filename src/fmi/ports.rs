@@ -71,18 +71,25 @@ pub fn exact_at_step_start(
     let Solver::Exact(next) = next else {
         unreachable!("an exact solver stays exact")
     };
-    if !switch_may_be_imminent(&next, exc, 100.0 * SWITCH_LOOKAHEAD) {
-        return Ok(next);
+    let mut shown = next;
+    if switch_may_be_imminent(&shown, exc, 100.0 * SWITCH_LOOKAHEAD) {
+        let now = shown.time();
+        let mut ahead = shown.clone();
+        ahead.watch_switches();
+        ahead.advance(now + SWITCH_LOOKAHEAD, exc)?;
+        if !ahead.first_switch().is_nan() {
+            shown = ahead;
+        }
     }
-    let now = next.time();
-    let mut ahead = next.clone();
-    ahead.watch_switches();
-    ahead.advance(now + SWITCH_LOOKAHEAD, exc)?;
-    Ok(if ahead.first_switch().is_nan() {
-        next
-    } else {
-        ahead
-    })
+    // On a prescribed support the step's first call makes the mode at its
+    // start the reference of the support's law (`mode::support_law`; the
+    // master computed the inputs with the outputs shown): an empty call
+    // shows it so, as the step will start.
+    if shown.system().prescribed() {
+        let t = shown.time();
+        shown.advance(t, exc)?;
+    }
+    Ok(shown)
 }
 
 /// Absolute acceleration of the structure's cluster (body 0's: the
