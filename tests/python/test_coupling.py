@@ -17,7 +17,6 @@ from fmpy import simulate_fmu
 from scipy.integrate import solve_ivp
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
 from sll import coupling  # noqa: E402
 from sll.coupling import Building, broadband_record, drift_error, exact_building, observed_order  # noqa: E402
 
