@@ -1,0 +1,406 @@
+"""Co-simulation masters over partners (sll.cosim.partners) and connections
+(docs/stack-on-a-floor.md).
+
+    sim = CoSimulation([stack, frame], [
+        ("stack.floorForce", "frame.floor2.force", +1, "N"),    # the stack pushes the floor
+        ("frame.floor2.accel", "stack.ag", +1, "m/s2"),         # the floor carries the stack
+    ])
+    run = sim.run(stop=10.0, H=0.005, master="interface-jacobian",
+                  record=["frame.floor2.disp", "stack.slip[1]"])
+
+Masters:
+- "jacobi": at every communication point read every connected output, set every
+  input, step every partner from t to t + H;
+- "gauss-seidel": partners step one after the other in `order`; a partner
+  takes the inputs of partners already at t + H from their new values (the chord
+  between t and t + H, or the newest value held with constant extrapolation);
+- extrapolation "constant" (zero-order hold) or "linear" (the slope through the
+  last two communication points, handed to partners that take input slopes:
+  FMI 2.0 FMUs that canInterpolateInputs, OpenSeesPartner);
+- "interface-jacobian": for stacks on floors (connections `S.floorForce -> P.X`
+  and `P.Y -> S.ag`, gains +1): the stack's `attachedMass` goes into the
+  floor partner's mass at X (add_mass), its `slidingForce` (constant between
+  switches) is applied as the force, the stack gets the partner's mobility at
+  X as `supportMobility`; mass and force are updated at every stick/slip
+  switch. No algebraic loop, no added-mass instability. Event handling
+  (`events`): "rollback" (every partner can roll back: the floor partner steps
+  first, the stack follows with the chord of the floor's acceleration; at a
+  switch both go back and step to it), "stack-first" (a partner cannot roll
+  back: the stack steps first with the floor acceleration extrapolated, finds
+  its switch by early return (FMI 3.0) or tSwitch and its own rollback, then
+  the floor partner steps to the switch), "auto" (rollback if every partner
+  can, else stack-first), "none" (switches are taken at communication points
+  only: for comparison).
+A master that cannot run a configuration raises ConfigurationError saying why.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .partners import ConfigurationError, Partner
+
+MASTERS = ("jacobi", "gauss-seidel", "interface-jacobian")
+EXTRAPOLATIONS = ("constant", "linear")
+EVENTS = ("auto", "rollback", "stack-first", "none")
+# A switch closer than this fraction of H to the step's start is the one just
+# landed on; the landing on a switch reported by tSwitch goes this fraction of H
+# past it, so that the switch happens inside the landing step (docs/coupling.md).
+SWITCH_SLACK = 1e-6
+LANDING = 1e-7
+
+
+@dataclass(frozen=True)
+class Connection:
+    """`target` input <- gain * `source` output; names are "partner.port"."""
+
+    source: str
+    target: str
+    gain: float = 1.0
+    unit: str = ""
+
+    @staticmethod
+    def of(item) -> "Connection":
+        if isinstance(item, Connection):
+            return item
+        return Connection(*item)
+
+    def split(self, which: str) -> tuple[str, str]:
+        name = getattr(self, which)
+        partner, dot, port = name.partition(".")
+        if not dot or not port:
+            raise ConfigurationError(f"connection {self.source} -> {self.target}: {name!r} is not "
+                                     "'partner.port'")
+        return partner, port
+
+
+class CoSimulation:
+    """Partners and the connections between them; `run` couples them with a master."""
+
+    def __init__(self, partners: list[Partner], connections: list):
+        self.partners = {}
+        for p in partners:
+            if p.name in self.partners:
+                raise ConfigurationError(f"two partners are named {p.name!r}")
+            self.partners[p.name] = p
+        self.connections = [Connection.of(c) for c in connections]
+        targets = set()
+        for c in self.connections:
+            for which in ("source", "target"):
+                partner, _ = c.split(which)
+                if partner not in self.partners:
+                    raise ConfigurationError(f"connection {c.source} -> {c.target}: no partner "
+                                             f"{partner!r} (partners: {sorted(self.partners)})")
+            if c.target in targets:
+                raise ConfigurationError(f"input {c.target} is connected twice")
+            targets.add(c.target)
+            if not math.isfinite(c.gain):
+                raise ConfigurationError(f"connection {c.source} -> {c.target}: gain {c.gain}")
+
+    # ------------------------------------------------------------- helpers
+    def _get(self, name: str) -> float:
+        partner, _, port = name.partition(".")
+        return self.partners[partner].get(port)
+
+    def _set(self, c: Connection, value: float, slope: float):
+        partner, port = c.split("target")
+        p = self.partners[partner]
+        p.set(port, c.gain * value, c.gain * slope if p.takes_slopes else 0.0)
+
+    def _sample(self, t: float, on_grid: bool):
+        self.out["time"].append(t)
+        self.out["on_grid"].append(on_grid)
+        for name in self.record:
+            self.out[name].append(self._get(name))
+
+    def _step(self, p: Partner, t: float, h: float, exact: bool = True) -> float:
+        reached = p.step(t, h)
+        self.steps[p.name] += 1
+        if exact and reached < t + h - 1e-12 * max(1.0, t + h):
+            raise ConfigurationError(f"{p.name} returned early at {reached:.9g} (step to {t + h:.9g}): "
+                                     "this master needs partners created without early return")
+        return reached
+
+    # ----------------------------------------------------------------- run
+    def run(self, stop: float, H: float, master: str = "jacobi", extrapolation: str = "linear",
+            order: list[str] | None = None, events: str = "auto", record=()) -> dict:
+        """Couples the partners from 0 to `stop` with macro step H (the last
+        step is shorter when H does not divide stop). Returns time (every
+        communication point, switch landings included), on_grid (which are not
+        landings), each recorded "partner.port" as an array, and the cost:
+        steps (per partner), rollbacks, landings, seconds."""
+        if master not in MASTERS:
+            raise ConfigurationError(f"master = {master!r}: it must be one of {MASTERS}")
+        if extrapolation not in EXTRAPOLATIONS:
+            raise ConfigurationError(f"extrapolation = {extrapolation!r}: one of {EXTRAPOLATIONS}")
+        if events not in EVENTS:
+            raise ConfigurationError(f"events = {events!r}: one of {EVENTS}")
+        if not (math.isfinite(H) and 0 < H <= stop):
+            raise ConfigurationError(f"H = {H}: it must be > 0 and at most stop = {stop}")
+        order = list(order or self.partners)
+        if sorted(order) != sorted(self.partners):
+            raise ConfigurationError(f"order {order} must name every partner once: {sorted(self.partners)}")
+        self.record = list(record)
+        for name in self.record:
+            partner, dot, _ = name.partition(".")
+            if partner not in self.partners or not dot:
+                raise ConfigurationError(f"record {name!r}: not 'partner.port' of a partner")
+        plan = self._interface_plan(events) if master == "interface-jacobian" else None
+        if master != "interface-jacobian":
+            for p in self.partners.values():
+                if p.returns_early:
+                    raise ConfigurationError(f"{p.name} may return early: {master} steps every partner "
+                                             "to the same time (create it without early return)")
+        self.out = {"time": [], "on_grid": [], **{n: [] for n in self.record}}
+        self.steps = {n: 0 for n in self.partners}
+        self.rollbacks = self.landings = 0
+        for p in self.partners.values():
+            p.start(0.0, stop)
+        started = time.perf_counter()
+        n_steps = math.ceil(stop / H - 1e-9)
+        if plan is None:
+            self._classic(stop, H, n_steps, master, extrapolation, order)
+        else:
+            self._interface(stop, H, n_steps, plan, extrapolation)
+        result = {k: np.array(v) for k, v in self.out.items()}
+        result.update(steps=dict(self.steps), rollbacks=self.rollbacks, landings=self.landings,
+                      seconds=time.perf_counter() - started, master=master, H=H)
+        return result
+
+    # ---------------------------------------------- jacobi and gauss-seidel
+    def _classic(self, stop, H, n_steps, master, extrapolation, order):
+        sources = sorted({c.source for c in self.connections})
+        previous = None
+        t = 0.0
+        self._sample(t, True)
+        for k in range(n_steps):
+            end = min((k + 1) * H, stop)
+            h = end - t
+            y0 = {s: self._get(s) for s in sources}
+            slope = dict.fromkeys(sources, 0.0)
+            if extrapolation == "linear" and previous is not None:
+                tp, yp = previous
+                slope = {s: (y0[s] - yp[s]) / (t - tp) for s in sources}
+            previous = (t, y0)
+            if master == "jacobi":
+                for c in self.connections:
+                    self._set(c, y0[c.source], slope[c.source])
+                for p in self.partners.values():
+                    self._step(p, t, h)
+            else:
+                done = set()
+                for name in order:
+                    p = self.partners[name]
+                    for c in self.connections:
+                        if c.split("target")[0] != name:
+                            continue
+                        if c.split("source")[0] in done:
+                            y1 = self._get(c.source)
+                            if extrapolation == "constant" or not p.takes_slopes:
+                                self._set(c, y1, 0.0)
+                            else:
+                                self._set(c, y0[c.source], (y1 - y0[c.source]) / h)
+                        else:
+                            self._set(c, y0[c.source], slope[c.source])
+                    self._step(p, t, h)
+                    done.add(name)
+            t = end
+            self._sample(t, True)
+
+    # ---------------------------------------------------- interface Jacobian
+    def _interface_plan(self, events: str) -> dict:
+        """The stacks on floors in the connections, checked: which stack, which
+        floor partner and force port, which acceleration output drives it."""
+        stacks = {}
+        for c in self.connections:
+            sp, sport = c.split("source")
+            tp, tport = c.split("target")
+            if sport == "floorForce":
+                stacks.setdefault(sp, {})["force"] = (c, tp, tport)
+            elif tport == "ag" and self._is_stack(tp):
+                stacks.setdefault(tp, {})["accel"] = (c, sp, sport)
+            else:
+                raise ConfigurationError(
+                    f"interface-jacobian couples stacks to floors only (S.floorForce -> P.force "
+                    f"port, P.acceleration -> S.ag); {c.source} -> {c.target} is neither")
+        if not stacks:
+            raise ConfigurationError("interface-jacobian: no stack (no connection from S.floorForce)")
+        plan = []
+        floors_used = set()
+        for name, links in stacks.items():
+            if set(links) != {"force", "accel"}:
+                missing = ({"force", "accel"} - set(links)).pop()
+                raise ConfigurationError(f"interface-jacobian: stack {name!r} has no {missing} connection "
+                                         "(it needs S.floorForce -> P.<force port> and P.<accel> -> S.ag)")
+            (cf, fp, fport), (ca, ap, aport) = links["force"], links["accel"]
+            if fp != ap:
+                raise ConfigurationError(f"interface-jacobian: stack {name!r} pushes {fp!r} but is "
+                                         f"carried by {ap!r}: they must be the same partner")
+            for c in (cf, ca):
+                if c.gain != 1.0:
+                    raise ConfigurationError(
+                        f"interface-jacobian: {c.source} -> {c.target} has gain {c.gain}; the master "
+                        "moves the stack's attached mass into the floor, which holds for +1 only "
+                        "(the floor takes +floorForce and carries the stack with its own acceleration)")
+            stack, floor = self.partners[name], self.partners[fp]
+            for port in ("attachedMass", "slidingForce"):
+                if not self._has(stack, port):
+                    raise ConfigurationError(f"interface-jacobian: stack {name!r} has no output {port!r} "
+                                             "(StackOnFloor.fmu's interface)")
+            if not floor.can_add_mass:
+                raise ConfigurationError(
+                    f"interface-jacobian: partner {fp!r} cannot add mass at {fport!r} (no add_mass): the "
+                    "master moves the stack's attached mass into the floor; use jacobi or gauss-seidel "
+                    "with it, or a partner with add_mass (OpenSeesPartner, a model of your own)")
+            if (fp, fport) in floors_used:
+                raise ConfigurationError(f"interface-jacobian: two stacks on {fp}.{fport}: one stack per floor")
+            floors_used.add((fp, fport))
+            plan.append({"stack": stack, "floor": floor, "force": fport, "accel": aport,
+                         "mass": None, "sliding": None})
+        everyone = list(self.partners.values())
+        if events == "auto":
+            events = "rollback" if all(p.can_rollback for p in everyone) else "stack-first"
+        if events == "rollback":
+            cannot = [p.name for p in everyone if not p.can_rollback]
+            if cannot:
+                raise ConfigurationError(f"events='rollback': {', '.join(cannot)} cannot roll back (save/"
+                                         "restore); use events='stack-first', which steps the stack first "
+                                         "and the other partners to its switch")
+        if events in ("rollback", "stack-first"):
+            for entry in plan:
+                s = entry["stack"]
+                if not (s.returns_early or (s.can_rollback and self._has(s, "tSwitch"))):
+                    raise ConfigurationError(
+                        f"events={events!r}: stack {s.name!r} can neither return early at a switch "
+                        "(FMI 3.0) nor roll back to land on its tSwitch; use events='none'")
+        if len(plan) > 1 and events == "stack-first" and not all(e["stack"].can_rollback for e in plan):
+            raise ConfigurationError("events='stack-first' with several stacks: every stack must roll back "
+                                     "(a stack that switches first sets the time the others go back to)")
+        return {"entries": plan, "events": events}
+
+    def _is_stack(self, name: str) -> bool:
+        return self._has(self.partners[name], "floorForce")
+
+    @staticmethod
+    def _has(p: Partner, port: str) -> bool:
+        names = getattr(p, "vars", None)
+        if names is not None:
+            return port in names
+        try:
+            p.get(port)
+            return True
+        except Exception:
+            return False
+
+    def _sync(self, plan, t: float):
+        """Consistent values at t: the floor's acceleration to the stack, the
+        stack's attached mass and sliding force (the mode at t+) to the floor,
+        again until the mode no longer changes (a switch moves mass between
+        them, which changes the floor's acceleration)."""
+        for _ in range(6):
+            changed = False
+            for e in plan["entries"]:
+                e["stack"].set("ag", e["floor"].get(e["accel"]), 0.0)
+            for e in plan["entries"]:
+                mass = e["stack"].get("attachedMass")
+                sliding = e["stack"].get("slidingForce")
+                if mass != e["mass"]:
+                    e["floor"].add_mass(e["force"], mass)
+                    e["mass"], changed = mass, True
+                if sliding != e["sliding"]:
+                    e["floor"].set(e["force"], sliding, 0.0)
+                    e["sliding"], changed = sliding, True
+            if not changed:
+                return
+
+    def _switch_time(self, stack: Partner, t: float, end: float, reached: float, H: float) -> float:
+        """Where the stack's step from t should have stopped: its early return,
+        or just past its tSwitch, or `end`."""
+        slack = SWITCH_SLACK * H
+        if reached < end - slack:
+            return reached
+        if self._has(stack, "tSwitch"):
+            ts = stack.get("tSwitch")
+            if t + slack < ts < end - slack:  # NaN (no switch) compares False
+                return ts + LANDING * H
+        return end
+
+    def _interface(self, stop, H, n_steps, plan, extrapolation):
+        entries, events = plan["entries"], plan["events"]
+        for e in entries:
+            if self._has(e["stack"], "supportMobility"):
+                e["stack"].set("supportMobility", e["floor"].mobility(e["force"]), 0.0)
+        partners = list(self.partners.values())
+        floors = list({id(e["floor"]): e["floor"] for e in entries}.values())
+        stacks = [e["stack"] for e in entries]
+        t, k = 0.0, 0
+        self._sync(plan, t)
+        self._sample(t, True)
+        history = None  # (t, floor accelerations) at the last communication point
+        while k < n_steps:
+            end = min((k + 1) * H, stop)
+            self._sync(plan, t)
+            a0 = [e["floor"].get(e["accel"]) for e in entries]
+            if events == "rollback":
+                saved = {p.name: p.save() for p in partners}
+                for f in floors:
+                    self._step(f, t, end - t)
+                a1 = [e["floor"].get(e["accel"]) for e in entries]
+                slopes = [(b - a) / (end - t) for a, b in zip(a0, a1)]
+                for e, a, s in zip(entries, a0, slopes):
+                    e["stack"].set("ag", a, s)
+                reached = [self._step(s, t, end - t, exact=False) for s in stacks]
+                t1 = min(self._switch_time(s, t, end, r, H) for s, r in zip(stacks, reached))
+                if t1 < end:
+                    self.rollbacks += 1
+                    self.landings += 1
+                    for f in floors:
+                        f.restore(saved[f.name])
+                        self._step(f, t, t1 - t)
+                    for e, s, r, a, sl in zip(entries, stacks, reached, a0, slopes):
+                        if abs(r - t1) > 1e-12 * max(1.0, t1):  # did not stop there itself
+                            s.restore(saved[s.name])
+                            s.set("ag", a, sl)
+                            self._step(s, t, t1 - t, exact=False)
+                for p in partners:
+                    p.free(saved[p.name])
+            else:
+                if extrapolation == "linear" and history is not None:
+                    slopes = [(a - b) / (t - history[0]) for a, b in zip(a0, history[1])]
+                else:
+                    slopes = [0.0] * len(entries)
+                for e, a, s in zip(entries, a0, slopes):
+                    e["stack"].set("ag", a, s)
+                saved = {s.name: s.save() for s in stacks if s.can_rollback and events == "stack-first"}
+                reached = [self._step(s, t, end - t, exact=False) for s in stacks]
+                t1 = end
+                if events == "stack-first":
+                    t1 = min(self._switch_time(s, t, end, r, H) for s, r in zip(stacks, reached))
+                    if t1 < end:
+                        self.landings += 1
+                        for e, s, r, a, sl in zip(entries, stacks, reached, a0, slopes):
+                            if abs(r - t1) > 1e-12 * max(1.0, t1):
+                                self.rollbacks += 1
+                                s.restore(saved[s.name])
+                                s.set("ag", a, sl)
+                                self._step(s, t, t1 - t, exact=False)
+                elif min(reached) < end - 1e-12 * max(1.0, end):
+                    raise ConfigurationError("events='none' needs stacks created without early return")
+                for s in stacks:
+                    if s.name in saved:
+                        s.free(saved[s.name])
+                for f in floors:
+                    self._step(f, t, t1 - t)
+            # A slope through a switch means nothing: the history restarts there.
+            # (a0 was read after the values at t were made consistent, so the
+            # history may start at a landing, but not end at one.)
+            history = (t, a0) if t1 == end else None
+            t = t1
+            if t1 == end:
+                k += 1
+            self._sync(plan, t)
+            self._sample(t, t1 == end)
