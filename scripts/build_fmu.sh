@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
-# Builds the release library and writes both FMUs from it:
-#   target/fmu/StackedLiveLoad.fmu        FMI 2.0 Co-Simulation
+# Builds the release library and writes the FMUs of both models from it:
+#   target/fmu/StackedLiveLoad.fmu        FMI 2.0 Co-Simulation (the stack on an SDOF storey)
 #   target/fmu/fmi3/StackedLiveLoad.fmu   FMI 3.0 Co-Simulation (early return, Event Mode)
+#   target/fmu/StackOnFloor.fmu           FMI 2.0 (the stack on another model's floor)
+#   target/fmu/fmi3/StackOnFloor.fmu      FMI 3.0
+# (one library, copied into each FMU under the FMU's model identifier; the
+# GUID / instantiation token picks the model),
 # each with modelDescription.xml, documentation/, resources/default_record.csv
 # (the embedded default ground motion) and the binaries of every platform built:
 #   x86-64 Linux  (FMI 2.0 binaries/linux64,  FMI 3.0 binaries/x86_64-linux), always;
@@ -36,13 +40,15 @@ if [ "${SLL_CROSS:-1}" != 0 ]; then
   done
 fi
 
-package() {  # package VERSION OUT
-  local version=$1 out=$2 stage=target/fmu/stage$1
+package() {  # package VERSION MODEL OUT
+  local version=$1 model=$2 out=$3 stage=target/fmu/stage$1$2
   rm -rf "$stage"
   mkdir -p "$stage/documentation" "$stage/resources" "$(dirname "$out")"
-  local committed=modelDescription/modelDescription.xml
-  [ "$version" = 3 ] && committed=modelDescription/fmi3/modelDescription.xml
-  ./target/release/model_description "$version" > "$stage/modelDescription.xml"
+  local folder=modelDescription
+  [ "$model" = StackedLiveLoad ] || folder=modelDescription/$model
+  local committed=$folder/modelDescription.xml
+  [ "$version" = 3 ] && committed=$folder/fmi3/modelDescription.xml
+  ./target/release/model_description "$version" "$model" > "$stage/modelDescription.xml"
   cmp -s "$stage/modelDescription.xml" "$committed" || {
     echo "$committed is stale: regenerate it with" >&2
     echo "  UPDATE_GENERATED=1 cargo test --test generated_files" >&2
@@ -53,7 +59,7 @@ package() {  # package VERSION OUT
     local dir=$fmi2dir ext=${lib##*.}
     [ "$version" = 3 ] && dir=$fmi3dir
     mkdir -p "$stage/binaries/$dir"
-    cp "$lib" "$stage/binaries/$dir/StackedLiveLoad.$ext"
+    cp "$lib" "$stage/binaries/$dir/$model.$ext"
   done
   cp README.md "$stage/documentation/README.md"
   cp -r docs "$stage/documentation/docs"   # the README links into docs/
@@ -73,5 +79,7 @@ with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
 print(out)
 PY
 }
-package 2 target/fmu/StackedLiveLoad.fmu
-package 3 target/fmu/fmi3/StackedLiveLoad.fmu
+package 2 StackedLiveLoad target/fmu/StackedLiveLoad.fmu
+package 3 StackedLiveLoad target/fmu/fmi3/StackedLiveLoad.fmu
+package 2 StackOnFloor target/fmu/StackOnFloor.fmu
+package 3 StackOnFloor target/fmu/fmi3/StackOnFloor.fmu

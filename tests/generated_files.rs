@@ -33,6 +33,19 @@ fn fmi3_model_description_is_fresh() {
 }
 
 #[test]
+fn stack_on_floor_model_descriptions_are_fresh() {
+    use stacked_live_load::fmi::variables::Model;
+    check(
+        "modelDescription/StackOnFloor/modelDescription.xml",
+        &stacked_live_load::fmi::model_description::model_description_of(Model::Floor),
+    );
+    check(
+        "modelDescription/StackOnFloor/fmi3/modelDescription.xml",
+        &stacked_live_load::fmi::model_description_fmi3::model_description_of(Model::Floor),
+    );
+}
+
+#[test]
 fn c_header_is_fresh() {
     let crate_dir = env!("CARGO_MANIFEST_DIR");
     let config = cbindgen::Config::from_root_or_default(crate_dir);

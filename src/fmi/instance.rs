@@ -12,6 +12,7 @@
 //! - `saved_state`: fmi2Get/SetFMUstate, their byte format and its checks.
 
 use crate::fmi::resource_location;
+use crate::fmi::variables::Model;
 use crate::ground::formats;
 use crate::ground::record::GroundMotion;
 use crate::limits;
@@ -21,6 +22,7 @@ use crate::physics::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
 
+pub mod floor;
 mod fmi3_cs;
 mod saved_state;
 pub mod state_table;
@@ -97,15 +99,29 @@ impl Default for ParameterValues {
 }
 
 impl ParameterValues {
+    /// The defaults of `model`.
+    fn of(model: Model) -> ParameterValues {
+        match model {
+            Model::Storey => ParameterValues::default(),
+            Model::Floor => ParameterValues {
+                params: floor::default_params(),
+                ..ParameterValues::default()
+            },
+        }
+    }
+
     fn build(&self) -> Result<Solver, ParamError> {
         let kind = SolverKind::from_code(self.solver).unwrap_or(SolverKind::EventLocated);
         Solver::new(&self.params, kind, self.max_step, self.friction_eps)
+            .map_err(|e| floor::public_error(&self.params, e))
     }
 }
 
 /// Everything that changes while simulating: what a saved state holds.
 #[derive(Clone)]
 struct Dynamic {
+    /// The model (a saved state is restored only into an instance of it).
+    model: Model,
     phase: Phase,
     start_time: f64,
     stop_time: Option<f64>,
@@ -121,23 +137,27 @@ struct Dynamic {
     fext: f64,
     der_ag: f64,
     der_fext: f64,
+    /// StackOnFloor's `supportMobility` (1/kg; 0 for the storey).
+    support_mobility: f64,
     sim: Option<Solver>,
 }
 
 impl Dynamic {
-    fn initial() -> Dynamic {
+    fn initial(model: Model) -> Dynamic {
         Dynamic {
+            model,
             phase: Phase::Instantiated,
             start_time: 0.0,
             stop_time: None,
             time: 0.0,
             steps: 0,
             t_switch: 0.0,
-            values: ParameterValues::default(),
+            values: ParameterValues::of(model),
             ag: 0.0,
             fext: 0.0,
             der_ag: 0.0,
             der_fext: 0.0,
+            support_mobility: 0.0,
             sim: None,
         }
     }
@@ -146,6 +166,13 @@ impl Dynamic {
 /// A saved FMU state (`fmi2FMUstate`).
 #[derive(Clone)]
 pub struct SavedState(Dynamic);
+
+impl SavedState {
+    /// The model whose instance saved it.
+    pub fn model(&self) -> Model {
+        self.0.model
+    }
+}
 
 /// One FMU instance (see the module docs).
 pub struct Instance {
@@ -165,6 +192,8 @@ pub struct Instance {
     abi: Abi,
     /// FMI 3.0 `earlyReturnAllowed` and `eventModeUsed` of fmi3InstantiateCoSimulation.
     fmi3_flags: (bool, bool),
+    /// The model the importer's GUID / instantiation token named.
+    model: Model,
 }
 
 impl Instance {
@@ -213,10 +242,24 @@ impl Instance {
             record: None,
             record_checked: false,
             outputs: None,
-            d: Dynamic::initial(),
+            d: Dynamic::initial(Model::Storey),
             abi: Abi::Fmi2,
             fmi3_flags: (false, false),
+            model: Model::Storey,
         }
+    }
+
+    /// Makes this (fresh) instance one of `model` (the storey unless
+    /// called): its variables, defaults and equations.
+    pub fn use_model(&mut self, model: Model) {
+        self.model = model;
+        self.d = Dynamic::initial(model);
+        self.outputs = None;
+    }
+
+    /// The model of this instance.
+    pub fn model(&self) -> Model {
+        self.model
     }
 
     /// Marks the instance as created through the FMI 3.0 ABI, with its
@@ -442,7 +485,7 @@ impl Instance {
     /// (A record already read stays cached, and is read again unless its
     /// file holds the same bytes.)
     pub fn reset(&mut self) -> Status {
-        self.d = Dynamic::initial();
+        self.d = Dynamic::initial(self.model);
         self.outputs = None;
         self.record_checked = false;
         Status::Ok

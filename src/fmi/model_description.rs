@@ -1,18 +1,12 @@
 //! `modelDescription.xml`, generated with quick-xml from the variable table.
 
-use crate::fmi::c_api::GUID;
-use crate::fmi::variables::{table, Causality, Id, Kind, Variable, TYPES, UNITS};
+use crate::fmi::variables::{Causality, Id, Kind, Model, Variable, TYPES, UNITS};
 use quick_xml::events::{BytesDecl, Event};
 use quick_xml::Writer;
 use std::io;
 
-/// The model identifier: the shared library's and the FMU's name.
+/// The storey model's identifier: the shared library's and the FMU's name.
 pub const MODEL_IDENTIFIER: &str = "StackedLiveLoad";
-
-/// The model's description (both FMI versions).
-pub(super) const DESCRIPTION: &str =
-    "Linear SDOF structure carrying a stack of up to 8 rigid blocks that stick or slide with \
-     Coulomb friction, under ground acceleration; exact stick/slip events";
 
 /// The generation tool (both FMI versions).
 pub(super) fn tool() -> String {
@@ -39,32 +33,45 @@ const DEFAULT_EXPERIMENT: [(&str, &str); 3] = [
     ("stepSize", "0.005"),
 ];
 
-/// The whole model description, UTF-8, deterministic.
+/// The whole model description of the storey (StackedLiveLoad), UTF-8, deterministic.
 pub fn model_description() -> String {
-    render(write)
+    model_description_of(Model::Storey)
+}
+
+/// The whole FMI 2.0 model description of `model`, UTF-8, deterministic.
+pub fn model_description_of(model: Model) -> String {
+    render(model, write)
 }
 
 /// An XML document written by `write` after the declaration (both FMI
 /// versions): UTF-8, indented, deterministic.
-pub(super) fn render(write: fn(&mut Writer<Vec<u8>>) -> io::Result<()>) -> String {
+pub(super) fn render(
+    model: Model,
+    write: fn(&mut Writer<Vec<u8>>, Model) -> io::Result<()>,
+) -> String {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
-        .and_then(|_| write(&mut w))
+        .and_then(|_| write(&mut w, model))
         .expect("writing to memory cannot fail");
     let mut text = String::from_utf8(w.into_inner()).expect("UTF-8");
     text.push('\n');
     text
 }
 
-fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
-    let description = DESCRIPTION;
+fn write(w: &mut Writer<Vec<u8>>, model: Model) -> io::Result<()> {
+    let description = model.description();
     let tool = tool();
-    let variables = table();
+    let variables = model.table();
+    let directional = if model == Model::Floor {
+        "true"
+    } else {
+        "false"
+    };
     w.create_element("fmiModelDescription")
         .with_attributes([
             ("fmiVersion", "2.0"),
-            ("modelName", MODEL_IDENTIFIER),
-            ("guid", GUID),
+            ("modelName", model.identifier()),
+            ("guid", model.guid()),
             ("description", description),
             ("generationTool", tool.as_str()),
             ("variableNamingConvention", "structured"),
@@ -73,7 +80,7 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
         .write_inner_content(|w| {
             w.create_element("CoSimulation")
                 .with_attributes([
-                    ("modelIdentifier", MODEL_IDENTIFIER),
+                    ("modelIdentifier", model.identifier()),
                     ("canHandleVariableCommunicationStepSize", "true"),
                     ("canInterpolateInputs", "true"),
                     ("maxOutputDerivativeOrder", "2"),
@@ -81,20 +88,20 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                     ("canSerializeFMUstate", "true"),
                     ("canNotUseMemoryManagementFunctions", "true"),
                     ("canBeInstantiatedOnlyOncePerProcess", "false"),
-                    ("providesDirectionalDerivative", "false"),
+                    ("providesDirectionalDerivative", directional),
                 ])
                 .write_empty()?;
-            write_units(w)?;
-            write_types(w)?;
+            write_units(w, &variables)?;
+            write_types(w, &variables)?;
             write_log_categories_and_experiment(w)?;
             w.create_element("ModelVariables")
                 .write_inner_content(|w| {
                     for v in &variables {
-                        write_variable(w, v)?;
+                        write_variable(w, model, v)?;
                     }
                     Ok(())
                 })?;
-            write_structure(w, &variables)
+            write_structure(w, model, &variables)
         })?;
     Ok(())
 }
@@ -115,10 +122,23 @@ pub(super) fn write_log_categories_and_experiment(w: &mut Writer<Vec<u8>>) -> io
     Ok(())
 }
 
-pub(super) fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+/// The simple types the variables of a model use, in [`TYPES`] order.
+pub(super) fn types_used(
+    variables: &[Variable],
+) -> Vec<(&'static str, &'static str, &'static str)> {
+    TYPES
+        .iter()
+        .filter(|t| variables.iter().any(|v| v.declared_type == Some(t.0)))
+        .copied()
+        .collect()
+}
+
+/// The units of the types a model uses, in [`UNITS`] order.
+pub(super) fn write_units(w: &mut Writer<Vec<u8>>, variables: &[Variable]) -> io::Result<()> {
+    let types = types_used(variables);
     w.create_element("UnitDefinitions")
         .write_inner_content(|w| {
-            for &(name, kg, m, s) in UNITS {
+            for &(name, kg, m, s) in UNITS.iter().filter(|u| types.iter().any(|t| t.2 == u.0)) {
                 let exponents: Vec<(&str, String)> = [("kg", kg), ("m", m), ("s", s)]
                     .into_iter()
                     .filter(|&(_, e)| e != 0)
@@ -138,10 +158,10 @@ pub(super) fn write_units(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
     Ok(())
 }
 
-fn write_types(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+fn write_types(w: &mut Writer<Vec<u8>>, variables: &[Variable]) -> io::Result<()> {
     w.create_element("TypeDefinitions")
         .write_inner_content(|w| {
-            for &(name, quantity, unit) in TYPES {
+            for (name, quantity, unit) in types_used(variables) {
                 w.create_element("SimpleType")
                     .with_attribute(("name", name))
                     .write_inner_content(|w| {
@@ -164,13 +184,14 @@ fn write_types(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
 pub(super) fn causality_and_variability(id: Id) -> (&'static str, &'static str) {
     match (id.causality(), id.kind()) {
         (Causality::Parameter, _) => ("parameter", "fixed"),
-        (Causality::Input, _) => ("input", "continuous"),
+        (Causality::Input, _) if id.is_continuous() => ("input", "continuous"),
+        (Causality::Input, _) => ("input", "discrete"),
         (Causality::Output, Kind::Real) if id.is_continuous() => ("output", "continuous"),
         (Causality::Output, _) => ("output", "discrete"),
     }
 }
 
-fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
+fn write_variable(w: &mut Writer<Vec<u8>>, model: Model, v: &Variable) -> io::Result<()> {
     let kind = v.id.kind();
     let (causality, variability) = causality_and_variability(v.id);
     let vr = v.id.vr().to_string();
@@ -196,7 +217,7 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
             if let Some(s) = &v.start {
                 attrs.push(("start", s.as_str()));
             }
-            let bounds = bounds(v.id);
+            let bounds = bounds(model, v.id);
             attrs.extend(bounds.iter().map(|(k, x)| (*k, x.as_str())));
             w.create_element(element)
                 .with_attributes(attrs)
@@ -206,14 +227,14 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
     Ok(())
 }
 
-/// `min` and `max` of a variable with a range ([`Id::range`]), as written in
+/// `min` and `max` of a variable with a range ([`Model::range`]), as written in
 /// the XML (integers without a decimal point).
-pub(super) fn bounds(id: Id) -> Vec<(&'static str, String)> {
+pub(super) fn bounds(model: Model, id: Id) -> Vec<(&'static str, String)> {
     let number = |x: f64| match id.kind() {
         Kind::Real => format!("{x:?}"),
         _ => format!("{}", x as i64),
     };
-    let Some((lo, hi)) = id.range() else {
+    let Some((lo, hi)) = model.range(id) else {
         return vec![];
     };
     let mut out = vec![("min", number(lo))];
@@ -225,7 +246,11 @@ pub(super) fn bounds(id: Id) -> Vec<(&'static str, String)> {
 /// same instant, and, being calculated at initialization, in
 /// `InitialUnknowns`, where every parameter is a known too (the outputs at
 /// the start depend on the scene). Indices are 1-based positions.
-fn write_structure(w: &mut Writer<Vec<u8>>, variables: &[Variable]) -> io::Result<()> {
+fn write_structure(
+    w: &mut Writer<Vec<u8>>,
+    model: Model,
+    variables: &[Variable],
+) -> io::Result<()> {
     let index_of = |id: Id| {
         let i = variables.iter().position(|v| v.id == id);
         (i.expect("every input is in the table") + 1).to_string()
@@ -241,7 +266,10 @@ fn write_structure(w: &mut Writer<Vec<u8>>, variables: &[Variable]) -> io::Resul
         .enumerate()
         .filter(|(_, v)| v.id.causality() == Causality::Output)
         .map(|(i, v)| {
-            let inputs = v.id.input_dependencies().iter().map(|&id| index_of(id));
+            let inputs = model
+                .input_dependencies(v.id)
+                .iter()
+                .map(|&id| index_of(id));
             ((i + 1).to_string(), inputs.collect())
         })
         .collect();

@@ -5,38 +5,47 @@
 //! Co-Simulation capabilities of this ABI (early return, Event Mode).
 
 use super::model_description::{
-    bounds, causality_and_variability, render, tool, write_log_categories_and_experiment,
-    write_units, DESCRIPTION, MODEL_IDENTIFIER,
+    bounds, causality_and_variability, render, tool, types_used,
+    write_log_categories_and_experiment, write_units,
 };
-use crate::fmi::c_api::GUID;
-use crate::fmi::variables::{table, Causality, Id, Kind, Variable, TYPES};
+use crate::fmi::variables::{Causality, Id, Kind, Model, Variable};
 use quick_xml::Writer;
 use std::io;
 
-/// The whole FMI 3.0 model description, UTF-8, deterministic.
+/// The whole FMI 3.0 model description of the storey (StackedLiveLoad), UTF-8, deterministic.
 pub fn model_description() -> String {
-    render(write)
+    model_description_of(Model::Storey)
 }
 
-fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
+/// The whole FMI 3.0 model description of `model`, UTF-8, deterministic.
+pub fn model_description_of(model: Model) -> String {
+    render(model, write)
+}
+
+fn write(w: &mut Writer<Vec<u8>>, model: Model) -> io::Result<()> {
     let tool = tool();
-    let variables = table();
+    let variables = model.table();
+    let directional = if model == Model::Floor {
+        "true"
+    } else {
+        "false"
+    };
     w.create_element("fmiModelDescription")
         .with_attributes([
             ("fmiVersion", "3.0"),
-            ("modelName", MODEL_IDENTIFIER),
-            ("instantiationToken", GUID),
-            ("description", DESCRIPTION),
+            ("modelName", model.identifier()),
+            ("instantiationToken", model.guid()),
+            ("description", model.description()),
             ("generationTool", tool.as_str()),
             ("variableNamingConvention", "structured"),
         ])
         .write_inner_content(|w| {
             w.create_element("CoSimulation")
                 .with_attributes([
-                    ("modelIdentifier", MODEL_IDENTIFIER),
+                    ("modelIdentifier", model.identifier()),
                     ("canGetAndSetFMUState", "true"),
                     ("canSerializeFMUState", "true"),
-                    ("providesDirectionalDerivatives", "false"),
+                    ("providesDirectionalDerivatives", directional),
                     ("providesAdjointDerivatives", "false"),
                     ("canBeInstantiatedOnlyOncePerProcess", "false"),
                     ("canHandleVariableCommunicationStepSize", "true"),
@@ -48,10 +57,10 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                     ("providesEvaluateDiscreteStates", "false"),
                 ])
                 .write_empty()?;
-            write_units(w)?;
+            write_units(w, &variables)?;
             w.create_element("TypeDefinitions")
                 .write_inner_content(|w| {
-                    for &(name, quantity, unit) in TYPES {
+                    for (name, quantity, unit) in types_used(&variables) {
                         let mut attrs = vec![("name", name)];
                         if !quantity.is_empty() {
                             attrs.push(("quantity", quantity));
@@ -76,16 +85,16 @@ fn write(w: &mut Writer<Vec<u8>>) -> io::Result<()> {
                         ])
                         .write_empty()?;
                     for v in &variables {
-                        write_variable(w, v)?;
+                        write_variable(w, model, v)?;
                     }
                     Ok(())
                 })?;
-            write_structure(w, &variables)
+            write_structure(w, model, &variables)
         })?;
     Ok(())
 }
 
-fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
+fn write_variable(w: &mut Writer<Vec<u8>>, model: Model, v: &Variable) -> io::Result<()> {
     let kind = v.id.kind();
     let (causality, variability) = causality_and_variability(v.id);
     let element = match kind {
@@ -112,7 +121,7 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
             attrs.push(("start", s));
         }
     }
-    let bounds = bounds(v.id);
+    let bounds = bounds(model, v.id);
     attrs.extend(bounds.iter().map(|(k, x)| (*k, x.as_str())));
     let e = w.create_element(element).with_attributes(attrs);
     match (kind, start) {
@@ -134,7 +143,11 @@ fn write_variable(w: &mut Writer<Vec<u8>>, v: &Variable) -> io::Result<()> {
 /// Every output in `Output` with the inputs it depends on at the same
 /// instant and, being calculated at initialization, in `InitialUnknown`,
 /// where the parameters are knowns too. FMI 3.0 names them by value reference.
-fn write_structure(w: &mut Writer<Vec<u8>>, variables: &[Variable]) -> io::Result<()> {
+fn write_structure(
+    w: &mut Writer<Vec<u8>>,
+    model: Model,
+    variables: &[Variable],
+) -> io::Result<()> {
     let parameters: Vec<u32> = variables
         .iter()
         .filter(|v| v.id.causality() == Causality::Parameter)
@@ -144,7 +157,10 @@ fn write_structure(w: &mut Writer<Vec<u8>>, variables: &[Variable]) -> io::Resul
         .iter()
         .filter(|v| v.id.causality() == Causality::Output)
         .map(|v| {
-            let inputs = v.id.input_dependencies().iter().map(|&id: &Id| id.vr());
+            let inputs = model
+                .input_dependencies(v.id)
+                .iter()
+                .map(|&id: &Id| id.vr());
             (v.id.vr(), inputs.collect())
         })
         .collect();

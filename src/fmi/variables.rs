@@ -1,9 +1,149 @@
-//! The FMU's variables: one table that both the get/set functions and the
-//! generated `modelDescription.xml` read. Names and value references are the
-//! public interface; value references are unique across all types.
+//! The FMUs' variables: one table per model that both the get/set functions
+//! and the generated `modelDescription.xml` read. Names and value references
+//! are the public interface; value references are unique across all types
+//! and shared by the models (a variable of both has the same reference).
+//!
+//! One binary holds two models ([`Model`]): `StackedLiveLoad`, the stack on
+//! an SDOF structure, and `StackOnFloor`, the stack on a support whose
+//! absolute acceleration is an input. The importer's GUID / instantiation
+//! token picks the model; each model has its own table ([`Model::table`]).
 
-use crate::physics::params::{Params, MAX_BLOCKS, RANGES};
+use crate::physics::params::{check_scalar, ParamError, Params, MAX_BLOCKS, RANGES};
 use crate::physics::solver::SolverKind;
+
+/// The models of this binary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Model {
+    /// `StackedLiveLoad`: a linear SDOF structure carrying the stack.
+    Storey,
+    /// `StackOnFloor`: the stack on a support whose absolute acceleration
+    /// is the input `ag` (the floor of another model).
+    Floor,
+}
+
+impl Model {
+    /// Every model of the binary.
+    pub const ALL: [Model; 2] = [Model::Storey, Model::Floor];
+
+    /// The model identifier: the FMU's and its binary's name.
+    pub fn identifier(self) -> &'static str {
+        match self {
+            Model::Storey => "StackedLiveLoad",
+            Model::Floor => "StackOnFloor",
+        }
+    }
+
+    /// The GUID (FMI 2.0) and instantiation token (FMI 3.0) of its model
+    /// description ([`crate::fmi::c_api::GUID`], [`crate::fmi::c_api::FLOOR_GUID`]).
+    pub const fn guid(self) -> &'static str {
+        match self {
+            Model::Storey => crate::fmi::c_api::GUID,
+            Model::Floor => crate::fmi::c_api::FLOOR_GUID,
+        }
+    }
+
+    /// The model whose GUID / instantiation token is `token`.
+    pub fn from_token(token: &str) -> Option<Model> {
+        Model::ALL.into_iter().find(|m| m.guid() == token)
+    }
+
+    /// Its variables, in model-description order.
+    pub fn table(self) -> Vec<Variable> {
+        match self {
+            Model::Storey => table(),
+            Model::Floor => floor_table(),
+        }
+    }
+
+    /// Whether variable `id` belongs to the model.
+    pub fn has(self, id: Id) -> bool {
+        match self {
+            Model::Storey => !matches!(
+                id,
+                Id::M(_)
+                    | Id::SupportMobility
+                    | Id::FloorForce
+                    | Id::AttachedMass
+                    | Id::SlidingForce
+            ),
+            Model::Floor => !matches!(
+                id,
+                Id::Mp
+                    | Id::Tp
+                    | Id::Zeta
+                    | Id::MaxStep
+                    | Id::FrictionEps
+                    | Id::Alpha(_)
+                    | Id::Fext
+                    | Id::Up
+                    | Id::Vp
+                    | Id::ApAbs
+                    | Id::BaseShear
+                    | Id::PeakUp
+                    | Id::PeakApAbs
+                    | Id::Estrain
+                    | Id::Eviscous
+                    | Id::Solver
+            ),
+        }
+    }
+
+    /// The model's variable with value reference `vr`, if any.
+    pub fn lookup(self, vr: u32) -> Option<Id> {
+        Id::from_vr(vr).filter(|&id| self.has(id))
+    }
+
+    /// The range the model enforces on a parameter or input ([`Id::range`]):
+    /// a StackOnFloor has at least one block.
+    pub fn range(self, id: Id) -> Option<(f64, Option<f64>)> {
+        match (self, id) {
+            (Model::Floor, Id::NBlocks) => Some((1.0, Some(MAX_BLOCKS as f64))),
+            _ => id.range(),
+        }
+    }
+
+    /// The inputs output `id` depends on at the same instant (direct
+    /// feedthrough; docs/coupling-ports.md).
+    ///
+    /// StackOnFloor: the cluster stuck to the support moves with it, so its
+    /// blocks' absolute accelerations, the forces of its stuck interfaces
+    /// and the force on the floor follow `ag` at once; a jump of `ag` can
+    /// break a stick of that cluster, and `supportMobility` enters the
+    /// resolution of the mode, so the stick flags, the attached mass and
+    /// the sliding force (constant within a mode) change with either, as
+    /// may the force and acceleration of any block (any block can be in
+    /// that cluster). Displacements, velocities, slips, peaks, energies and
+    /// counters are state only.
+    pub fn input_dependencies(self, id: Id) -> &'static [Id] {
+        match self {
+            Model::Storey => id.input_dependencies(),
+            Model::Floor => match id {
+                Id::FloorForce
+                | Id::AttachedMass
+                | Id::SlidingForce
+                | Id::AbAbs(_)
+                | Id::F(_)
+                | Id::Stuck(_) => &[Id::Ag, Id::SupportMobility],
+                _ => &[],
+            },
+        }
+    }
+
+    /// The model's one-sentence description.
+    pub fn description(self) -> &'static str {
+        match self {
+            Model::Storey => {
+                "Linear SDOF structure carrying a stack of up to 8 rigid blocks that stick or \
+                 slide with Coulomb friction, under ground acceleration; exact stick/slip events"
+            }
+            Model::Floor => {
+                "A stack of 1 to 8 rigid blocks that stick or slide with Coulomb friction on a \
+                 rigid support (the floor of another model) whose absolute acceleration is the \
+                 input ag; the force on the floor is an output; exact stick/slip events"
+            }
+        }
+    }
+}
 
 /// What a variable is. Each variant is the FMU variable of the same name
 /// (see [`Id::name`]); indexed variants carry the block / interface number 1..=8.
@@ -21,9 +161,12 @@ pub enum Id {
     Alpha(usize),
     Mus(usize),
     Muk(usize),
+    /// StackOnFloor: mass of block j (kg).
+    M(usize),
     // Real inputs
     Ag,
     Fext,
+    SupportMobility,
     // Real outputs
     Up,
     Vp,
@@ -43,6 +186,9 @@ pub enum Id {
     AbAbs(usize),
     F(usize),
     PeakSlip(usize),
+    FloorForce,
+    AttachedMass,
+    SlidingForce,
     // Integers
     NBlocks,
     Solver,
@@ -91,8 +237,10 @@ impl Id {
             Id::Alpha(j) => at(10, j),
             Id::Mus(j) => at(20, j),
             Id::Muk(j) => at(30, j),
+            Id::M(j) => at(40, j),
             Id::Ag => 100,
             Id::Fext => 101,
+            Id::SupportMobility => 102,
             Id::Up => 200,
             Id::Vp => 201,
             Id::ApAbs => 202,
@@ -105,6 +253,9 @@ impl Id {
             Id::Eviscous => 209,
             Id::Efriction => 210,
             Id::TSwitch => 211,
+            Id::FloorForce => 212,
+            Id::AttachedMass => 213,
+            Id::SlidingForce => 214,
             Id::Ub(j) => at(300, j),
             Id::Vb(j) => at(310, j),
             Id::Slip(j) => at(320, j),
@@ -136,8 +287,10 @@ impl Id {
             10..=19 => array(Id::Alpha),
             20..=29 => array(Id::Mus),
             30..=39 => array(Id::Muk),
+            40..=49 => array(Id::M),
             100 => Some(Id::Ag),
             101 => Some(Id::Fext),
+            102 => Some(Id::SupportMobility),
             200 => Some(Id::Up),
             201 => Some(Id::Vp),
             202 => Some(Id::ApAbs),
@@ -150,6 +303,9 @@ impl Id {
             209 => Some(Id::Eviscous),
             210 => Some(Id::Efriction),
             211 => Some(Id::TSwitch),
+            212 => Some(Id::FloorForce),
+            213 => Some(Id::AttachedMass),
+            214 => Some(Id::SlidingForce),
             300..=309 => array(Id::Ub),
             310..=319 => array(Id::Vb),
             320..=329 => array(Id::Slip),
@@ -180,8 +336,13 @@ impl Id {
             Id::Alpha(j) => indexed("alpha", j),
             Id::Mus(j) => indexed("mus", j),
             Id::Muk(j) => indexed("muk", j),
+            Id::M(j) => indexed("m", j),
             Id::Ag => "ag".into(),
             Id::Fext => "Fext".into(),
+            Id::SupportMobility => "supportMobility".into(),
+            Id::FloorForce => "floorForce".into(),
+            Id::AttachedMass => "attachedMass".into(),
+            Id::SlidingForce => "slidingForce".into(),
             Id::Up => "up".into(),
             Id::Vp => "vp".into(),
             Id::ApAbs => "apAbs".into(),
@@ -232,10 +393,11 @@ impl Id {
             | Id::Alpha(_)
             | Id::Mus(_)
             | Id::Muk(_)
+            | Id::M(_)
             | Id::NBlocks
             | Id::Solver
             | Id::RecordFile => Causality::Parameter,
-            Id::Ag | Id::Fext => Causality::Input,
+            Id::Ag | Id::Fext | Id::SupportMobility => Causality::Input,
             _ => Causality::Output,
         }
     }
@@ -261,6 +423,7 @@ impl Id {
             Id::Alpha(j)
             | Id::Mus(j)
             | Id::Muk(j)
+            | Id::M(j)
             | Id::Ub(j)
             | Id::Vb(j)
             | Id::Slip(j)
@@ -290,7 +453,7 @@ impl Id {
             _ if self.kind() != Kind::Real || self.causality() == Causality::Output => return None,
             _ => {}
         }
-        let name = self.name();
+        let name = self.range_name();
         let base = name.split('[').next().unwrap_or(&name);
         let &(_, lo, hi, _) = RANGES.iter().find(|r| r.0 == base)?;
         // check_scalar excludes zeta = 1 (critical damping).
@@ -302,10 +465,37 @@ impl Id {
         Some((lo, Some(hi)))
     }
 
+    /// The name its range has in [`RANGES`]: its own, but `m[j]`, which
+    /// is checked as `alpha[j]` (StackOnFloor's mass ratios to `mp = 1 kg`).
+    fn range_name(self) -> String {
+        match self {
+            Id::M(j) => format!("alpha[{j}]"),
+            _ => self.name(),
+        }
+    }
+
+    /// Checks a value of this Real parameter or input against its range
+    /// ([`check_scalar`]); the error names the variable.
+    pub fn check(self, x: f64) -> Result<(), ParamError> {
+        check_scalar(&self.range_name(), x).map_err(|e| ParamError {
+            field: self.name(),
+            allowed: match self {
+                Id::M(_) => format!("{} (kg)", e.allowed),
+                _ => e.allowed,
+            },
+            ..e
+        })
+    }
+
     /// Whether the variable varies continuously in time (Real inputs and
     /// Real outputs but `tSwitch`, which changes at communication points only).
     pub fn is_continuous(self) -> bool {
-        self.kind() == Kind::Real && self.causality() != Causality::Parameter && self != Id::TSwitch
+        self.kind() == Kind::Real
+            && self.causality() != Causality::Parameter
+            && !matches!(
+                self,
+                Id::TSwitch | Id::AttachedMass | Id::SlidingForce | Id::SupportMobility
+            )
     }
 }
 
@@ -334,6 +524,7 @@ pub const TYPES: &[(&str, &str, &str)] = &[
     ("Force", "Force", "N"),
     ("Energy", "Energy", "J"),
     ("Ratio", "", "1"),
+    ("Mobility", "", "1/kg"),
 ];
 
 /// Units with their SI base-unit exponents (kg, m, s).
@@ -346,6 +537,7 @@ pub const UNITS: &[(&str, i32, i32, i32)] = &[
     ("m/s2", 0, 1, -2),
     ("N", 1, 1, -2),
     ("J", 1, 2, -2),
+    ("1/kg", -1, 0, 0),
 ];
 
 fn real(v: f64) -> Option<String> {
@@ -580,6 +772,106 @@ pub fn table() -> Vec<Variable> {
         None,
         None,
         "Mode resolutions where several stick/slip assignments were consistent (mus > muk) and the selection rule chose",
+    );
+    t
+}
+
+/// StackOnFloor's default mass of each block (kg): the storey's default
+/// blocks (alpha 0.25 of 1000 kg).
+pub const FLOOR_DEFAULT_MASS: f64 = 250.0;
+
+/// StackOnFloor's variables, in model-description order: the storey's block
+/// quantities under the same names and value references, the masses of the
+/// blocks, the support's acceleration and mobility as inputs, and the force
+/// on the floor.
+fn floor_table() -> Vec<Variable> {
+    let storey = table();
+    let from_storey = |id: Id| {
+        let mut v = storey
+            .iter()
+            .find(|v| v.id == id)
+            .expect("a shared variable is in the storey's table")
+            .clone();
+        if id == Id::NBlocks {
+            v.description = "Number of blocks in the stack, 1 to 8".into();
+        }
+        v
+    };
+    let own = |id: Id, ty: &'static str, start: Option<String>, desc: &str| Variable {
+        id,
+        name: id.name(),
+        description: match id.block() {
+            Some(j) => desc.replace("{j}", &j.to_string()),
+            None => desc.to_string(),
+        },
+        declared_type: Some(ty),
+        start,
+    };
+    let mut t = vec![from_storey(Id::NBlocks), from_storey(Id::G)];
+    for j in 1..=MAX_BLOCKS {
+        t.push(own(
+            Id::M(j),
+            "Mass",
+            real(FLOOR_DEFAULT_MASS),
+            "Mass of block {j} (block 1 rests on the support, block j on block j - 1)",
+        ));
+    }
+    let shared = |make: fn(usize) -> Id| (1..=MAX_BLOCKS).map(move |j| make(j));
+    t.extend(shared(Id::Mus).chain(shared(Id::Muk)).map(from_storey));
+    t.extend([Id::RecordFile, Id::RecordScale].map(from_storey));
+    t.push(own(
+        Id::Ag,
+        "Acceleration",
+        real(0.0),
+        "Absolute acceleration of the support (the floor the stack stands on), added to the record's",
+    ));
+    t.push(own(
+        Id::SupportMobility,
+        "Mobility",
+        real(0.0),
+        "d(floor acceleration)/d(floorForce) of the model the floor belongs to (its interface \
+         Jacobian, 1/kg), used to choose the stick/slip mode at a switch; 0: the support's motion \
+         is prescribed",
+    ));
+    t.push(own(
+        Id::FloorForce,
+        "Force",
+        None,
+        "Force the stack puts on the support along +x (= -F[1]); the partner applies +floorForce to its floor",
+    ));
+    t.push(own(
+        Id::AttachedMass,
+        "Mass",
+        None,
+        "Mass of the blocks stuck to the support now (0 if interface 1 slips): floorForce = slidingForce - attachedMass ag",
+    ));
+    t.push(own(
+        Id::SlidingForce,
+        "Force",
+        None,
+        "floorForce + attachedMass ag: the friction force from the first slipping interface, constant between stick/slip switches",
+    ));
+    for make in [
+        Id::Ub,
+        Id::Vb,
+        Id::Slip,
+        Id::AbAbs,
+        Id::F,
+        Id::PeakSlip,
+        Id::Stuck,
+    ] {
+        t.extend(shared(make).map(from_storey));
+    }
+    t.extend(
+        [
+            Id::Einput,
+            Id::Ekinetic,
+            Id::Efriction,
+            Id::TSwitch,
+            Id::NEvents,
+            Id::NAmbiguous,
+        ]
+        .map(from_storey),
     );
     t
 }

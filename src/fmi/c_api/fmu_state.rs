@@ -120,6 +120,14 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
             FMUstate.is_null(),
         ) {
             (Some(bytes), false) => match Instance::deserialize(bytes) {
+                Ok(state) if state.model() != comp.instance.model() => comp.instance.error(
+                    F,
+                    format!(
+                        "the state was saved by a {} instance; this one is a {}",
+                        state.model().identifier(),
+                        comp.instance.model().identifier()
+                    ),
+                ),
                 Ok(state) => {
                     let old = *FMUstate as *mut SavedState;
                     if old.is_null() {

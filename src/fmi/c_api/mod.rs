@@ -6,6 +6,7 @@
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
 use crate::fmi::instance::{Instance, LogSink, NullSink, SavedState, Status};
+use crate::fmi::variables::Model;
 use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -69,8 +70,11 @@ pub struct fmi2CallbackFunctions {
     pub componentEnvironment: fmi2ComponentEnvironment,
 }
 
-/// The GUID of this model description (change it when the interface changes).
+/// The GUID of the storey's (StackedLiveLoad's) model description; each
+/// model has its own ([`Model::guid`]).
 pub const GUID: &str = "{6b1f0c9e-3a57-4d2b-9c84-57acced11fe2}";
+/// The GUID of StackOnFloor's model description (change it when its interface changes).
+pub const FLOOR_GUID: &str = "{2f8d4b1a-7c3e-4e59-a1d6-0b9e5f3c8a47}";
 
 const OK: fmi2Status = Status::Ok as fmi2Status;
 const ERROR: fmi2Status = Status::Error as fmi2Status;
@@ -205,17 +209,33 @@ unsafe fn string_arg(s: fmi2String) -> Option<String> {
     (!s.is_null()).then(|| CStr::from_ptr(s).to_string_lossy().into_owned())
 }
 
-/// Checks the importer's GUID (FMI 2.0) or instantiation token (FMI 3.0)
-/// against this FMU's, logging the mismatch.
+/// Picks the model of the instance from the importer's GUID (FMI 2.0) or
+/// instantiation token (FMI 3.0): each model of the binary has its own. An
+/// unknown one is logged and refused (false).
 unsafe fn token_matches(instance: &mut Instance, func: &str, token: *const c_char) -> bool {
     let token = string_arg(token).unwrap_or_default();
-    if token != GUID {
-        instance.error(
-            func,
-            format!("the GUID / instantiation token {token} does not match this FMU's {GUID}"),
-        );
+    match Model::from_token(&token) {
+        Some(model) => {
+            instance.use_model(model);
+            true
+        }
+        None => {
+            let known: Vec<String> = Model::ALL
+                .iter()
+                .map(|m| format!("{} {}", m.identifier(), m.guid()))
+                .collect();
+            instance.error(
+                func,
+                format!(
+                    "the GUID / instantiation token {} does not match any of this binary's models ({}): \
+                     use the one in the FMU's modelDescription.xml",
+                    crate::limits::quote(&token),
+                    known.join(", ")
+                ),
+            );
+            false
+        }
     }
-    token == GUID
 }
 
 /// fmi2GetString and fmi3GetString: the strings stay valid until the next

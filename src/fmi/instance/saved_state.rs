@@ -4,13 +4,16 @@
 //! beyond what the engine checks of its own state: a blob changed anywhere
 //! must be refused, never lead to a panic, a hang or a non-finite output.
 
-use super::{Dynamic, Instance, ParameterValues, Phase, SavedState, Status};
+use super::{floor, Dynamic, Instance, ParameterValues, Phase, SavedState, Status};
+use crate::fmi::variables::Model;
 use crate::physics::params::Params;
 use crate::physics::snapshot::{ByteReader, ByteWriter};
 
 const STATE_MAGIC: &[u8; 8] = b"SLLSTATE";
 /// 4: the count of steps (the time tolerance), and every field checked.
-const STATE_VERSION: u32 = 4;
+/// 5: the engine's support (structure or prescribed) and support mobility;
+/// the FMU's model (StackedLiveLoad 0, StackOnFloor 1) and `supportMobility`.
+const STATE_VERSION: u32 = 5;
 use crate::limits::{self, Num, MAX_PATH_BYTES, MAX_TIME};
 use crate::physics::params::{check_scalar, MAX_BLOCKS};
 use crate::physics::snapshot::SnapshotError;
@@ -74,6 +77,7 @@ pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
         ("Fext", d.fext),
         ("der(ag)", d.der_ag),
         ("der(Fext)", d.der_fext),
+        ("supportMobility", d.support_mobility),
     ];
     let blocks =
         (0..MAX_BLOCKS).flat_map(|j| [("alpha", p.alpha[j]), ("mus", p.mus[j]), ("muk", p.muk[j])]);
@@ -91,6 +95,12 @@ pub(super) fn check_saved(d: &Dynamic) -> Result<(), SnapshotError> {
         // The cross-field rules wait for fmi2ExitInitializationMode.
         return Ok(());
     };
+    if (d.model == Model::Floor) != floor::is_prescribed(p) {
+        return Err("the saved scene is not one of the saved model".into());
+    }
+    if d.model == Model::Floor && (d.fext != 0.0 || d.der_fext != 0.0 || v.solver != 1) {
+        return Err("a saved StackOnFloor state has an external force or another solver".into());
+    }
     let fresh = v.build().map_err(|e| format!("saved parameter {e}"))?;
     let same_solver = match (sim, &fresh) {
         (Solver::Exact(a), Solver::Exact(b)) => a.settings() == b.settings(),
@@ -133,6 +143,16 @@ impl Instance {
         if let Err(s) = self.require(F) {
             return s;
         }
+        if state.0.model != self.model {
+            return self.error(
+                F,
+                format!(
+                    "the state was saved by a {} instance; this one is a {}",
+                    state.0.model.identifier(),
+                    self.model.identifier()
+                ),
+            );
+        }
         self.d = state.0.clone();
         self.outputs = None;
         if self.d.sim.is_some() {
@@ -150,6 +170,10 @@ impl Instance {
         let mut w = ByteWriter::default();
         w.buf.extend_from_slice(STATE_MAGIC);
         w.u32(STATE_VERSION);
+        w.u8(match d.model {
+            Model::Storey => 0,
+            Model::Floor => 1,
+        });
         w.u8(d.phase as u8);
         w.f64s(&[d.start_time, d.stop_time.unwrap_or(0.0), d.time]);
         w.u8(u8::from(d.stop_time.is_some()));
@@ -159,7 +183,7 @@ impl Instance {
         w.str(&v.record_file);
         w.f64s(&[v.record_scale, v.max_step, v.friction_eps]);
         w.u32(v.solver as u32);
-        w.f64s(&[d.ag, d.fext, d.der_ag, d.der_fext]);
+        w.f64s(&[d.ag, d.fext, d.der_ag, d.der_fext, d.support_mobility]);
         // The parameters travel with the simulator when it exists; before
         // initialization they are written on their own.
         match &d.sim {
@@ -188,6 +212,11 @@ impl Instance {
                 "state format version {version} is not supported (this FMU reads {STATE_VERSION})"
             ));
         }
+        let model = match r.u8()? {
+            0 => Model::Storey,
+            1 => Model::Floor,
+            x => return Err(format!("unknown model {x}")),
+        };
         let phase = match r.u8()? {
             0 => Phase::Instantiated,
             1 => Phase::InitializationMode,
@@ -214,6 +243,7 @@ impl Instance {
             ..ParameterValues::default()
         };
         let (ag, fext, der_ag, der_fext) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
+        let support_mobility = r.f64()?;
         let sim = match r.u8()? {
             1 => {
                 let sim = Solver::read_state(&mut r)?;
@@ -229,6 +259,7 @@ impl Instance {
             return Err("the saved state has trailing bytes".into());
         }
         let d = Dynamic {
+            model,
             phase,
             start_time,
             stop_time,
@@ -240,6 +271,7 @@ impl Instance {
             fext,
             der_ag,
             der_fext,
+            support_mobility,
             sim,
         };
         check_saved(&d)?;

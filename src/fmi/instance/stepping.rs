@@ -4,9 +4,9 @@
 //! fmi2GetRealStatus (`fmi2LastSuccessfulTime`).
 
 use super::values::{name_of, real_output};
-use super::{Instance, Phase, Status};
+use super::{floor, Instance, Phase, Status};
 use crate::fmi::ports;
-use crate::fmi::variables::{Causality, Id};
+use crate::fmi::variables::{Causality, Id, Model};
 use crate::ground::record;
 use crate::limits::{self, Num};
 use crate::physics::engine::{Excitation, Outputs, SimError};
@@ -26,7 +26,21 @@ impl Instance {
         if self.outputs.is_none() {
             let exc = self.next_excitation();
             let sim = self.d.sim.as_ref().expect("built above");
-            let outputs = match ports::outputs_at_step_start(sim, &exc) {
+            let at_start = match self.model {
+                Model::Storey => ports::outputs_at_step_start(sim, &exc),
+                Model::Floor => {
+                    floor::at_step_start(sim, &exc, self.d.support_mobility).map(|next| {
+                        // The counters of the steps taken, as the storey's.
+                        let taken = sim.outputs();
+                        Outputs {
+                            n_events: taken.n_events,
+                            n_ambiguous: taken.n_ambiguous,
+                            ..next.outputs()
+                        }
+                    })
+                }
+            };
+            let outputs = match at_start {
                 Ok(o) => o,
                 Err(e) => return Err(self.error(func, e.to_string())),
             };
@@ -42,7 +56,7 @@ impl Instance {
     /// The excitation the next step starts with: the record's piece at the
     /// current time (the next one if this one ends within rounding of now,
     /// as a step would take it) plus the inputs and their derivatives.
-    fn next_excitation(&self) -> Excitation {
+    pub(super) fn next_excitation(&self) -> Excitation {
         let t = self.d.sim.as_ref().map_or(0.0, |s| s.time());
         let (a, slope) = match &self.record {
             Some((_, gm)) => {
@@ -127,7 +141,18 @@ impl Instance {
                 Err(s) => return s,
             };
             if !matches!(id, Id::Ag | Id::Fext) {
-                return self.error(F, format!("{} is not a Real input", name_of(id)));
+                return self.error(
+                    F,
+                    format!(
+                        "{} is not a continuous Real input: only ag{} take derivatives",
+                        name_of(id),
+                        if self.model == Model::Storey {
+                            " and Fext"
+                        } else {
+                            ""
+                        }
+                    ),
+                );
             }
             if order != 1 {
                 return self.error(
@@ -259,10 +284,10 @@ impl Instance {
         }
         // A jump of an input acts at the communication point, where the
         // outputs already showed it: tSwitch watches for switches after it.
-        let jump = if at_start.fext != sim.fext_now() {
-            sim.advance(sim.time(), &at_start)
-        } else {
-            Ok(())
+        let jump = match self.model {
+            Model::Floor => floor::take_inputs(sim, &at_start, self.d.support_mobility),
+            Model::Storey if at_start.fext != sim.fext_now() => sim.advance(sim.time(), &at_start),
+            Model::Storey => Ok(()),
         };
         let result = jump.and_then(|()| {
             sim.watch_switches();

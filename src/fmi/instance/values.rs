@@ -7,12 +7,21 @@ use super::{Instance, Phase, Status};
 use crate::fmi::variables::{Causality, Id};
 use crate::limits::{Num, MAX_PATH_BYTES};
 use crate::physics::engine::Outputs;
-use crate::physics::params::{check_scalar, ParamError, MAX_BLOCKS};
+use crate::physics::params::{ParamError, MAX_BLOCKS};
 use crate::physics::solver::SolverKind;
 
 impl Instance {
     pub(super) fn lookup(&mut self, func: &str, vr: u32) -> Result<Id, Status> {
-        Id::from_vr(vr).ok_or_else(|| self.error(func, format!("unknown value reference {vr}")))
+        let model = self.model;
+        model.lookup(vr).ok_or_else(|| {
+            self.error(
+                func,
+                format!(
+                    "unknown value reference {vr} (of no variable of {})",
+                    model.identifier()
+                ),
+            )
+        })
     }
 
     /// The variable behind `vr`, if it exists and may be set now.
@@ -65,8 +74,11 @@ impl Instance {
             Id::Alpha(j) => &mut v.params.alpha[j - 1],
             Id::Mus(j) => &mut v.params.mus[j - 1],
             Id::Muk(j) => &mut v.params.muk[j - 1],
+            // StackOnFloor: mp = 1 kg, so m[j] is alpha[j].
+            Id::M(j) => &mut v.params.alpha[j - 1],
             Id::Ag => &mut self.d.ag,
             Id::Fext => &mut self.d.fext,
+            Id::SupportMobility => &mut self.d.support_mobility,
             _ => return None,
         })
     }
@@ -92,7 +104,7 @@ impl Instance {
             if self.real_slot(id).is_none() {
                 return self.error(F, format!("{} is not a Real", name_of(id)));
             }
-            if let Err(e) = check_scalar(&name_of(id), x) {
+            if let Err(e) = id.check(x) {
                 return self.param_error(F, e);
             }
         }
@@ -112,9 +124,10 @@ impl Instance {
                 Ok(id) => id,
                 Err(s) => return s,
             };
+            let lowest = self.model.range(Id::NBlocks).map_or(0, |r| r.0 as i32);
             let problem = match id {
-                Id::NBlocks if (0..=MAX_BLOCKS as i32).contains(&x) => None,
-                Id::NBlocks => Some(format!("nBlocks = {x} is not allowed: it must be an integer from 0 to {MAX_BLOCKS}")),
+                Id::NBlocks if (lowest..=MAX_BLOCKS as i32).contains(&x) => None,
+                Id::NBlocks => Some(format!("nBlocks = {x} is not allowed: it must be an integer from {lowest} to {MAX_BLOCKS}")),
                 Id::Solver if SolverKind::from_code(x).is_some() => None,
                 Id::Solver => Some(format!("solver = {x} is not allowed: it must be 1 (event-located RK4), 2 (step-end switching) or 3 (tanh-regularized friction)")),
                 _ => Some(format!("{} is not an Integer", name_of(id))),
@@ -203,9 +216,26 @@ impl Instance {
                 Id::Alpha(j) => block(j, &p.alpha),
                 Id::Mus(j) => block(j, &p.mus),
                 Id::Muk(j) => block(j, &p.muk),
+                Id::M(j) => block(j, &p.alpha),
                 Id::Ag => self.d.ag,
                 Id::Fext => self.d.fext,
+                Id::SupportMobility => self.d.support_mobility,
                 Id::TSwitch => self.d.t_switch,
+                Id::FloorForce | Id::AttachedMass | Id::SlidingForce => {
+                    let params = p.clone();
+                    let ag = self.next_excitation().ag;
+                    let o = match self.current_outputs(F) {
+                        Ok(o) => o,
+                        Err(s) => return s,
+                    };
+                    let [floor_force, attached, sliding] =
+                        super::floor::port_outputs(o, &params, ag);
+                    match id {
+                        Id::FloorForce => floor_force,
+                        Id::AttachedMass => attached,
+                        _ => sliding,
+                    }
+                }
                 _ => {
                     let o = match self.current_outputs(F) {
                         Ok(o) => o,
