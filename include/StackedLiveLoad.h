@@ -467,15 +467,17 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c,
                                    fmi2FMUstate *FMUstate);
 
 /**
- * Not provided: always an error.
+ * Directional derivatives of Real outputs with respect to inputs at the
+ * current communication point (StackOnFloor; docs/coupling-ports.md):
+ * `dvUnknown = J dvKnown`. StackedLiveLoad does not provide them (an error).
  */
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
-                                        const fmi2ValueReference *_vUnknown_ref,
-                                        uintptr_t _nUnknown,
-                                        const fmi2ValueReference *_vKnown_ref,
-                                        uintptr_t _nKnown,
-                                        const fmi2Real *_dvKnown,
-                                        fmi2Real *_dvUnknown);
+                                        const fmi2ValueReference *vUnknown_ref,
+                                        uintptr_t nUnknown,
+                                        const fmi2ValueReference *vKnown_ref,
+                                        uintptr_t nKnown,
+                                        const fmi2Real *dvKnown,
+                                        fmi2Real *dvUnknown);
 
 /**
  * First derivatives of `ag` and `Fext` over the next step (order 1 only).
@@ -869,14 +871,14 @@ fmi3Status fmi3ActivateModelPartition(fmi3Instance instance,
                                       fmi3Float64 _activationTime);
 
 /**
- * Not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description): always fmi3Error, with a logged message.
+ * Not provided (the outputs' dependencies are in the model description; providesAdjointDerivatives is false): always fmi3Error, with a logged message.
  */
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance,
                                                fmi3ValueReference _valueReference,
                                                uintptr_t *_nDependencies);
 
 /**
- * Not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description): always fmi3Error, with a logged message.
+ * Not provided (the outputs' dependencies are in the model description; providesAdjointDerivatives is false): always fmi3Error, with a logged message.
  */
 fmi3Status fmi3GetVariableDependencies(fmi3Instance instance,
                                        fmi3ValueReference _dependent,
@@ -887,20 +889,7 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance,
                                        uintptr_t _nDependencies);
 
 /**
- * Not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description): always fmi3Error, with a logged message.
- */
-fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance,
-                                        const fmi3ValueReference *_unknowns,
-                                        uintptr_t _nUnknowns,
-                                        const fmi3ValueReference *_knowns,
-                                        uintptr_t _nKnowns,
-                                        const fmi3Float64 *_seed,
-                                        uintptr_t _nSeed,
-                                        fmi3Float64 *_sensitivity,
-                                        uintptr_t _nSensitivity);
-
-/**
- * Not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description): always fmi3Error, with a logged message.
+ * Not provided (the outputs' dependencies are in the model description; providesAdjointDerivatives is false): always fmi3Error, with a logged message.
  */
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance,
                                     const fmi3ValueReference *_unknowns,
@@ -1172,6 +1161,22 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance instance,
                                    const fmi3Byte *serializedState,
                                    uintptr_t size,
                                    fmi3FMUState *FMUState);
+
+/**
+ * Directional derivatives of Float64 outputs with respect to inputs at the
+ * current communication point (StackOnFloor; docs/coupling-ports.md):
+ * `sensitivity = J seed`, `nSeed = nKnowns`, `nSensitivity = nUnknowns`.
+ * StackedLiveLoad does not provide them (an error).
+ */
+fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance,
+                                        const fmi3ValueReference *unknowns,
+                                        uintptr_t nUnknowns,
+                                        const fmi3ValueReference *knowns,
+                                        uintptr_t nKnowns,
+                                        const fmi3Float64 *seed,
+                                        uintptr_t nSeed,
+                                        fmi3Float64 *sensitivity,
+                                        uintptr_t nSensitivity);
 
 /**
  * Resolves the event in Event Mode, with the inputs set there in force;

@@ -105,7 +105,7 @@ fn with_jump_in_peak(mut o: Outputs) -> Outputs {
 /// is flat otherwise. `|x|` within `slack` of the peak counts as at it: the
 /// peak was taken from the same values by another rounding path (a slip, as
 /// a difference of displacements, carries their rounding).
-fn running_peak(peak: f64, x: f64, x1: f64, x2: f64, slack: f64) -> [f64; 2] {
+pub(crate) fn running_peak(peak: f64, x: f64, x1: f64, x2: f64, slack: f64) -> [f64; 2] {
     if x.abs() < peak - slack {
         return [0.0, 0.0];
     }

@@ -144,20 +144,31 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     })
 }
 
-/// Not provided: always an error.
+/// Directional derivatives of Real outputs with respect to inputs at the
+/// current communication point (StackOnFloor; docs/coupling-ports.md):
+/// `dvUnknown = J dvKnown`. StackedLiveLoad does not provide them (an error).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     c: fmi2Component,
-    _vUnknown_ref: *const fmi2ValueReference,
-    _nUnknown: usize,
-    _vKnown_ref: *const fmi2ValueReference,
-    _nKnown: usize,
-    _dvKnown: *const fmi2Real,
-    _dvUnknown: *mut fmi2Real,
+    vUnknown_ref: *const fmi2ValueReference,
+    nUnknown: usize,
+    vKnown_ref: *const fmi2ValueReference,
+    nKnown: usize,
+    dvKnown: *const fmi2Real,
+    dvUnknown: *mut fmi2Real,
 ) -> fmi2Status {
     const F: &str = "fmi2GetDirectionalDerivative";
     with(c, F, |comp| {
-        comp.instance
-            .error(F, "directional derivatives are not provided")
+        match (
+            slice(vUnknown_ref, nUnknown),
+            slice(vKnown_ref, nKnown),
+            slice(dvKnown, nKnown),
+            slice_mut(dvUnknown, nUnknown),
+        ) {
+            (Some(unknowns), Some(knowns), Some(seed), Some(out)) => comp
+                .instance
+                .directional_derivative(unknowns, knowns, seed, out),
+            _ => null_argument(&mut comp.instance, F),
+        }
     })
 }

@@ -14,31 +14,23 @@
 use crate::fmi::ports::SWITCH_LOOKAHEAD;
 use crate::fmi::variables::Id;
 use crate::physics::engine::{Excitation, Outputs, SimError, Simulator};
-use crate::physics::params::{ParamError, Params, MAX_BLOCKS};
+use crate::physics::params::{ParamError, Params, Support, MAX_BLOCKS};
 use crate::physics::solver::{Solver, Stepper};
 
 /// The default scene: 2 blocks of [`crate::fmi::variables::FLOOR_DEFAULT_MASS`],
 /// the storey's default friction.
 pub fn default_params() -> Params {
-    let mut p = Params {
+    Params {
         mp: 1.0,
         alpha: [crate::fmi::variables::FLOOR_DEFAULT_MASS; MAX_BLOCKS],
+        support: Support::Prescribed,
         ..Params::default()
-    };
-    make_prescribed(&mut p);
-    p
-}
-
-/// Marks a scene as a stack on a prescribed support.
-fn make_prescribed(p: &mut Params) {
-    // PRE-MERGE: p.support = Support::Prescribed once the engine has it.
-    let _ = p;
+    }
 }
 
 /// Whether a scene is a stack on a prescribed support.
 pub fn is_prescribed(p: &Params) -> bool {
-    // PRE-MERGE: p.support == Support::Prescribed.
-    p.mp == 1.0
+    p.support == Support::Prescribed
 }
 
 /// An error of the engine's checks as the FMU names it: StackOnFloor's
@@ -68,17 +60,6 @@ pub fn attached_top(o: &Outputs, n: usize) -> usize {
     o.stuck[..n].iter().take_while(|&&s| s).count()
 }
 
-/// `floorForce`, `attachedMass` and `slidingForce` of the outputs `o` of a
-/// StackOnFloor scene `p` under support acceleration `ag`.
-pub fn port_outputs(o: &Outputs, p: &Params, ag: f64) -> [f64; 3] {
-    // PRE-MERGE: o.floor_force, o.attached_mass, o.sliding_force.
-    let m = masses(p);
-    let top = attached_top(o, p.n_blocks);
-    let attached: f64 = m[..top].iter().sum();
-    let floor_force = if p.n_blocks == 0 { 0.0 } else { -o.force[0] };
-    [floor_force, attached, floor_force + attached * ag]
-}
-
 /// Derivative of output `unknown` with respect to input `known` in the
 /// current mode (the mode the next step starts in): `Ok(None)` if `unknown`
 /// is not a Real output or `known` not an input of the model.
@@ -101,7 +82,7 @@ pub fn directional(o: &Outputs, p: &Params, unknown: Id, known: Id) -> Option<f6
         _ => return None,
     }
     Some(match unknown {
-        Id::FloorForce => -port_outputs(o, p, 0.0)[1],
+        Id::FloorForce => -o.attached_mass,
         Id::AbAbs(j) => {
             if block_of_attached(j) {
                 1.0
@@ -142,9 +123,7 @@ pub fn set_mobility(sim: &mut Solver, mobility: f64) -> Result<(), ParamError> {
 }
 
 fn set_exact_mobility(sim: &mut Simulator, mobility: f64) -> Result<(), ParamError> {
-    // PRE-MERGE: sim.set_support_mobility(mobility)
-    let _ = (sim, mobility);
-    Ok(())
+    sim.set_support_mobility(mobility)
 }
 
 /// Applies the inputs set for the next step at the current instant: the
@@ -175,4 +154,69 @@ pub fn at_step_start(sim: &Solver, exc: &Excitation, mobility: f64) -> Result<So
     } else {
         ahead
     })
+}
+
+/// First and second time derivatives of every continuous output of a
+/// StackOnFloor in the state `o` (from [`at_step_start`]: the mode the next
+/// step starts in) under the excitation `exc` of that step (`ag` now and its
+/// slope). The attached cluster moves with the support (absolute
+/// acceleration `ag`, derivative `der(ag)`); every other cluster has a
+/// constant absolute acceleration; `ag` is linear over a step. Entries that
+/// are not derivatives of continuous outputs are left at 0.
+pub fn derivatives(o: &Outputs, p: &Params, exc: &Excitation) -> [Outputs; 2] {
+    let n = p.n_blocks;
+    let m = masses(p);
+    let top = attached_top(o, n);
+    let (ag, ag1) = (exc.ag, exc.ag_rate);
+    // Body i = 0 (the support) ..= n: velocity relative to the support,
+    // absolute acceleration and its derivative.
+    let velocity = |i: usize| if i == 0 { 0.0 } else { o.vb[i - 1] };
+    let accel = |i: usize| match i {
+        0 => [ag, ag1],
+        i if i <= top => [o.ab_abs[i - 1], ag1],
+        i => [o.ab_abs[i - 1], 0.0],
+    };
+    let (mut d1, mut d2) = (Outputs::default(), Outputs::default());
+    // A running peak is taken in continuous time between steps, to the
+    // engine's accuracy (as ports::derivatives).
+    const ROUNDING: f64 = 1e-9;
+    let (mut p0, mut p1, mut ek1, mut ek2) = (0.0, 0.0, 0.0, 0.0);
+    for j in 1..=n {
+        let b = j - 1;
+        let (a, below) = (accel(j), accel(j - 1));
+        let (v, rel, rel1) = (velocity(j), a[0] - ag, a[1] - ag1);
+        let (v_rel, a_rel) = (v - velocity(j - 1), a[0] - below[0]);
+        [d1.ub[b], d2.ub[b]] = [v, rel];
+        [d1.vb[b], d2.vb[b]] = [rel, rel1];
+        [d1.slip[b], d2.slip[b]] = [v_rel, a_rel];
+        [d1.ab_abs[b], d2.ab_abs[b]] = [a[1], 0.0];
+        // A stuck interface of the attached cluster carries M_{j..top} ag
+        // plus a constant; any other a constant.
+        let mass_above: f64 = if j <= top {
+            m[b..top].iter().rev().sum()
+        } else {
+            0.0
+        };
+        d1.force[b] = mass_above * ag1;
+        let f = o.force[b];
+        d1.e_friction_of[b] = -f * v_rel;
+        d2.e_friction_of[b] = -(d1.force[b] * v_rel + f * a_rel);
+        let body = |i: usize| if i == 0 { 0.0 } else { o.ub[i - 1] };
+        let slack = ROUNDING * (o.peak_slip[b] + body(j).abs() + body(j - 1).abs());
+        [d1.peak_slip[b], d2.peak_slip[b]] =
+            crate::fmi::ports::running_peak(o.peak_slip[b], o.slip[b], v_rel, a_rel, slack);
+        p0 += m[b] * v;
+        p1 += m[b] * rel;
+        ek1 += m[b] * v * rel;
+        ek2 += m[b] * (rel * rel + v * rel1);
+    }
+    [d1.e_kinetic, d2.e_kinetic] = [ek1, ek2];
+    // Input energy in relative coordinates: -integral(sum m_j ag v_j dt).
+    d1.e_input = -ag * p0;
+    d2.e_input = -ag1 * p0 - ag * p1;
+    d1.e_friction = d1.e_friction_of.iter().sum();
+    d2.e_friction = d2.e_friction_of.iter().sum();
+    // floorForce = slidingForce - attachedMass ag.
+    d1.floor_force = -o.attached_mass * ag1;
+    [d1, d2]
 }

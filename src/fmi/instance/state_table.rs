@@ -114,6 +114,11 @@ pub const TABLE: &[Row] = &[
         "fmi3GetOutputDerivatives",
         EVENT | STEP | TERM,
     ),
+    row(
+        "fmi2GetDirectionalDerivative",
+        "fmi3GetDirectionalDerivative",
+        READ,
+    ),
     row("fmi2DoStep", "fmi3DoStep", STEP),
     row("fmi2GetStatus", "", STEP | TERM | ERR),
     row("fmi2GetRealStatus", "", STEP | TERM | ERR),

@@ -93,6 +93,12 @@ impl Instance {
         }
         let exc = self.next_excitation();
         let derivatives = match &self.d.sim {
+            Some(sim) if self.model == Model::Floor => {
+                match floor::at_step_start(sim, &exc, self.d.support_mobility) {
+                    Ok(next) => floor::derivatives(&next.outputs(), &self.d.values.params, &exc),
+                    Err(e) => return self.error(F, e.to_string()),
+                }
+            }
             Some(Solver::Exact(sim)) => match ports::exact_at_step_start(sim, &exc) {
                 Ok(next) => ports::derivatives(&next, &exc),
                 Err(e) => return self.error(F, e.to_string()),
@@ -329,8 +335,13 @@ impl Instance {
             (Ok(()), None) => {
                 // The inputs stand where their slopes took them: the outputs
                 // at the step's end see them there, and an input left alone
-                // is held at that value.
-                self.d.ag = ag_end;
+                // is held at that value. (On a support, where the outputs
+                // see `ag`, exactly as the engine took it to the step's end
+                // without a record.)
+                self.d.ag = match self.model {
+                    Model::Floor => self.d.ag + self.d.der_ag * (sim_end - sim_time),
+                    Model::Storey => ag_end,
+                };
                 self.d.fext = if check_scalar("Fext", fext_engine).is_ok() {
                     fext_engine
                 } else {
@@ -356,6 +367,119 @@ impl Instance {
                 self.error(F, message)
             }
         }
+    }
+
+    /// fmi2GetDirectionalDerivative (and fmi3GetDirectionalDerivative):
+    /// `out[i] = sum_k d unknowns[i] / d knowns[k] * seed[k]` at the current
+    /// communication point, in the mode the next step starts in, for Real
+    /// outputs with respect to inputs (StackOnFloor only; see
+    /// [`floor::directional`]). `seed` has one entry per known, `out` one
+    /// per unknown.
+    pub fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        out: &mut [f64],
+    ) -> Status {
+        const F: &str = "fmi2GetDirectionalDerivative";
+        if let Err(s) = self.require(F) {
+            return s;
+        }
+        if self.model != Model::Floor {
+            return self.error(
+                F,
+                format!(
+                    "directional derivatives are not provided by {} (providesDirectionalDerivative \
+                     is false; its outputs' dependencies are in the model description)",
+                    self.model.identifier()
+                ),
+            );
+        }
+        if seed.len() != knowns.len() || out.len() != unknowns.len() {
+            return self.error(
+                F,
+                format!(
+                    "{} seed values for {} knowns and {} sensitivities for {} unknowns: one \
+                     seed per known and one sensitivity per unknown",
+                    seed.len(),
+                    knowns.len(),
+                    out.len(),
+                    unknowns.len()
+                ),
+            );
+        }
+        let mut known_ids = Vec::with_capacity(knowns.len());
+        for &vr in knowns {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            if id.causality() != Causality::Input {
+                return self.error(
+                    F,
+                    format!(
+                        "{} is not an input: the knowns of a directional derivative are inputs \
+                         (ag, supportMobility)",
+                        name_of(id)
+                    ),
+                );
+            }
+            known_ids.push(id);
+        }
+        let mut unknown_ids = Vec::with_capacity(unknowns.len());
+        for &vr in unknowns {
+            let id = match self.lookup(F, vr) {
+                Ok(id) => id,
+                Err(s) => return s,
+            };
+            if id.causality() != Causality::Output || id.kind() != crate::fmi::variables::Kind::Real
+            {
+                return self.error(
+                    F,
+                    format!(
+                        "{} is not a Real output: it has no directional derivative",
+                        name_of(id)
+                    ),
+                );
+            }
+            unknown_ids.push(id);
+        }
+        if let Some((k, x)) = seed.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return self.error(
+                F,
+                format!(
+                    "the seed of {} is {}: it must be finite",
+                    name_of(known_ids[k]),
+                    Num(*x)
+                ),
+            );
+        }
+        let params = self.d.values.params.clone();
+        let o = match self.current_outputs(F) {
+            Ok(o) => o.clone(),
+            Err(s) => return s,
+        };
+        for (slot, &unknown) in out.iter_mut().zip(&unknown_ids) {
+            let mut sum = 0.0;
+            for (&known, &dv) in known_ids.iter().zip(seed) {
+                match floor::directional(&o, &params, unknown, known) {
+                    Some(d) => sum += d * dv,
+                    None => {
+                        return self.error(
+                            F,
+                            format!(
+                                "d {} / d {} is not provided",
+                                name_of(unknown),
+                                name_of(known)
+                            ),
+                        )
+                    }
+                }
+            }
+            *slot = sum;
+        }
+        self.all_finite(F, unknowns, out, "directional derivative of ")
     }
 
     /// `fmi2LastSuccessfulTime`.

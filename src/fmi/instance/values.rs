@@ -221,21 +221,6 @@ impl Instance {
                 Id::Fext => self.d.fext,
                 Id::SupportMobility => self.d.support_mobility,
                 Id::TSwitch => self.d.t_switch,
-                Id::FloorForce | Id::AttachedMass | Id::SlidingForce => {
-                    let params = p.clone();
-                    let ag = self.next_excitation().ag;
-                    let o = match self.current_outputs(F) {
-                        Ok(o) => o,
-                        Err(s) => return s,
-                    };
-                    let [floor_force, attached, sliding] =
-                        super::floor::port_outputs(o, &params, ag);
-                    match id {
-                        Id::FloorForce => floor_force,
-                        Id::AttachedMass => attached,
-                        _ => sliding,
-                    }
-                }
                 _ => {
                     let o = match self.current_outputs(F) {
                         Ok(o) => o,
@@ -361,6 +346,9 @@ pub(super) fn real_output(o: &Outputs, id: Id) -> Option<f64> {
         Id::AbAbs(j) => block(j, &o.ab_abs),
         Id::F(j) => block(j, &o.force),
         Id::PeakSlip(j) => block(j, &o.peak_slip),
+        Id::FloorForce => o.floor_force,
+        Id::AttachedMass => o.attached_mass,
+        Id::SlidingForce => o.sliding_force,
         _ => return None,
     })
 }

@@ -407,17 +407,21 @@ pub unsafe extern "C" fn fmi3ActivateModelPartition(
 }
 
 // Dependencies and partial derivatives (the model description declares the dependencies)
-/// Not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description): always fmi3Error, with a logged message.
+/// Not provided (the outputs' dependencies are in the model description; providesAdjointDerivatives is false): always fmi3Error, with a logged message.
 #[no_mangle]
 pub unsafe extern "C" fn fmi3GetNumberOfVariableDependencies(
     instance: fmi3Instance,
     _valueReference: fmi3ValueReference,
     _nDependencies: *mut usize,
 ) -> fmi3Status {
-    not_provided(instance, "fmi3GetNumberOfVariableDependencies", "not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description)")
+    not_provided(
+        instance,
+        "fmi3GetNumberOfVariableDependencies",
+        "not provided (the outputs' dependencies are in the model description)",
+    )
 }
 
-/// Not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description): always fmi3Error, with a logged message.
+/// Not provided (the outputs' dependencies are in the model description; providesAdjointDerivatives is false): always fmi3Error, with a logged message.
 #[no_mangle]
 pub unsafe extern "C" fn fmi3GetVariableDependencies(
     instance: fmi3Instance,
@@ -428,26 +432,14 @@ pub unsafe extern "C" fn fmi3GetVariableDependencies(
     _dependencyKinds: *mut c_int,
     _nDependencies: usize,
 ) -> fmi3Status {
-    not_provided(instance, "fmi3GetVariableDependencies", "not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description)")
+    not_provided(
+        instance,
+        "fmi3GetVariableDependencies",
+        "not provided (the outputs' dependencies are in the model description)",
+    )
 }
 
-/// Not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description): always fmi3Error, with a logged message.
-#[no_mangle]
-pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
-    instance: fmi3Instance,
-    _unknowns: *const fmi3ValueReference,
-    _nUnknowns: usize,
-    _knowns: *const fmi3ValueReference,
-    _nKnowns: usize,
-    _seed: *const fmi3Float64,
-    _nSeed: usize,
-    _sensitivity: *mut fmi3Float64,
-    _nSensitivity: usize,
-) -> fmi3Status {
-    not_provided(instance, "fmi3GetDirectionalDerivative", "not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description)")
-}
-
-/// Not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description): always fmi3Error, with a logged message.
+/// Not provided (the outputs' dependencies are in the model description; providesAdjointDerivatives is false): always fmi3Error, with a logged message.
 #[no_mangle]
 pub unsafe extern "C" fn fmi3GetAdjointDerivative(
     instance: fmi3Instance,
@@ -460,7 +452,11 @@ pub unsafe extern "C" fn fmi3GetAdjointDerivative(
     _sensitivity: *mut fmi3Float64,
     _nSensitivity: usize,
 ) -> fmi3Status {
-    not_provided(instance, "fmi3GetAdjointDerivative", "not provided (providesDirectionalDerivative and providesAdjointDerivative are false; dependencies are in the model description)")
+    not_provided(
+        instance,
+        "fmi3GetAdjointDerivative",
+        "not provided (the outputs' dependencies are in the model description)",
+    )
 }
 
 // Configuration Mode and discrete-state evaluation

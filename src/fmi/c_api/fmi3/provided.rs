@@ -434,6 +434,38 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     fmi2DeSerializeFMUstate(instance, serializedState as *const fmi2Byte, size, FMUState)
 }
 
+/// Directional derivatives of Float64 outputs with respect to inputs at the
+/// current communication point (StackOnFloor; docs/coupling-ports.md):
+/// `sensitivity = J seed`, `nSeed = nKnowns`, `nSensitivity = nUnknowns`.
+/// StackedLiveLoad does not provide them (an error).
+#[no_mangle]
+pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
+    instance: fmi3Instance,
+    unknowns: *const fmi3ValueReference,
+    nUnknowns: usize,
+    knowns: *const fmi3ValueReference,
+    nKnowns: usize,
+    seed: *const fmi3Float64,
+    nSeed: usize,
+    sensitivity: *mut fmi3Float64,
+    nSensitivity: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetDirectionalDerivative";
+    with(instance, F, |comp| {
+        match (
+            slice(unknowns, nUnknowns),
+            slice(knowns, nKnowns),
+            slice(seed, nSeed),
+            slice_mut(sensitivity, nSensitivity),
+        ) {
+            (Some(unknowns), Some(knowns), Some(seed), Some(out)) => comp
+                .instance
+                .directional_derivative(unknowns, knowns, seed, out),
+            _ => null_argument(&mut comp.instance, F),
+        }
+    })
+}
+
 /// Resolves the event in Event Mode, with the inputs set there in force;
 /// nothing further is needed or scheduled (every flag false).
 #[no_mangle]
