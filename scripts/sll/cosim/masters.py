@@ -127,12 +127,19 @@ class CoSimulation:
 
     # ----------------------------------------------------------------- run
     def run(self, stop: float, H: float, master: str = "jacobi", extrapolation: str = "linear",
-            order: list[str] | None = None, events: str = "auto", record=()) -> dict:
+            order: list[str] | None = None, events: str = "auto", record=(),
+            held_substeps: int = 4) -> dict:
         """Couples the partners from 0 to `stop` with macro step H (the last
         step is shorter when H does not divide stop). Returns time (every
         communication point, switch landings included), on_grid (which are not
         landings), each recorded "partner.port" as an array, and the cost:
-        steps (per partner), rollbacks, landings, seconds."""
+        steps (per partner), rollbacks, landings, seconds. `held_substeps`:
+        the interface-Jacobian master steps a stack that holds its inputs (FMI
+        3.0) in this many pieces per step, each with the floor acceleration at
+        its middle."""
+        if int(held_substeps) < 1:
+            raise ConfigurationError(f"held_substeps = {held_substeps}: at least 1")
+        self.held_substeps = int(held_substeps)
         if master not in MASTERS:
             raise ConfigurationError(f"master = {master!r}: it must be one of {MASTERS}")
         if extrapolation not in EXTRAPOLATIONS:
@@ -157,7 +164,7 @@ class CoSimulation:
                                              "to the same time (create it without early return)")
         self.out = {"time": [], "on_grid": [], **{n: [] for n in self.record}}
         self.steps = {n: 0 for n in self.partners}
-        self.rollbacks = self.landings = 0
+        self.rollbacks = self.landings = self.corrections = 0
         for p in self.partners.values():
             p.start(0.0, stop)
         started = time.perf_counter()
@@ -168,6 +175,7 @@ class CoSimulation:
             self._interface(stop, H, n_steps, plan, extrapolation)
         result = {k: np.array(v) for k, v in self.out.items()}
         result.update(steps=dict(self.steps), rollbacks=self.rollbacks, landings=self.landings,
+                      corrections=self.corrections,
                       seconds=time.perf_counter() - started, master=master, H=H)
         return result
 
@@ -260,7 +268,7 @@ class CoSimulation:
                 raise ConfigurationError(f"interface-jacobian: two stacks on {fp}.{fport}: one stack per floor")
             floors_used.add((fp, fport))
             plan.append({"stack": stack, "floor": floor, "force": fport, "accel": aport,
-                         "mass": None, "sliding": None})
+                         "mass": None, "sliding": None, "impulse": 0.0})
         everyone = list(self.partners.values())
         if events == "auto":
             events = "rollback" if all(p.can_rollback for p in everyone) else "stack-first"
@@ -329,6 +337,30 @@ class CoSimulation:
                 return ts + LANDING * H
         return end
 
+    def _stack_step(self, stack: Partner, t: float, h: float, value: float, slope: float) -> float:
+        """Steps a stack from t by h with the floor's acceleration value + slope
+        (t' - t): as value and slope to a stack that takes input slopes; to one
+        that holds its inputs (FMI 3.0), in `held_substeps` pieces, each with
+        the acceleration at its middle (exact velocity increments for a linear
+        acceleration). Returns the time reached: an early return stops short,
+        and so does a piece whose new value switches the stack at its start."""
+        if stack.takes_slopes:
+            stack.set("ag", value, slope)
+            return self._step(stack, t, h, exact=False)
+        n = self.held_substeps
+        here = t
+        for i in range(n):
+            end = t + h * (i + 1) / n if i < n - 1 else t + h
+            before = (stack.get("attachedMass"), stack.get("slidingForce")) if i else None
+            stack.set("ag", value + slope * (0.5 * (here + end) - t), 0.0)
+            if i and (stack.get("attachedMass"), stack.get("slidingForce")) != before:
+                return here  # the new value switched the stack at the piece's start: stop there
+            reached = self._step(stack, here, end - here, exact=False)
+            if reached < end - 1e-12 * max(1.0, end):
+                return reached
+            here = reached
+        return here
+
     def _interface(self, stop, H, n_steps, plan, extrapolation):
         entries, events = plan["entries"], plan["events"]
         for e in entries:
@@ -344,6 +376,10 @@ class CoSimulation:
         while k < n_steps:
             end = min((k + 1) * H, stop)
             self._sync(plan, t)
+            for e in entries:
+                if e["impulse"]:
+                    e["floor"].set(e["force"], e["sliding"] + e["impulse"] / (end - t), 0.0)
+                    e["impulse"], e["sliding"] = 0.0, None  # the next sync sets the force again
             a0 = [e["floor"].get(e["accel"]) for e in entries]
             if events == "rollback":
                 saved = {p.name: p.save() for p in partners}
@@ -351,9 +387,7 @@ class CoSimulation:
                     self._step(f, t, end - t)
                 a1 = [e["floor"].get(e["accel"]) for e in entries]
                 slopes = [(b - a) / (end - t) for a, b in zip(a0, a1)]
-                for e, a, s in zip(entries, a0, slopes):
-                    e["stack"].set("ag", a, s)
-                reached = [self._step(s, t, end - t, exact=False) for s in stacks]
+                reached = [self._stack_step(e["stack"], t, end - t, a, sl) for e, a, sl in zip(entries, a0, slopes)]
                 t1 = min(self._switch_time(s, t, end, r, H) for s, r in zip(stacks, reached))
                 if t1 < end:
                     self.rollbacks += 1
@@ -364,8 +398,7 @@ class CoSimulation:
                     for e, s, r, a, sl in zip(entries, stacks, reached, a0, slopes):
                         if abs(r - t1) > 1e-12 * max(1.0, t1):  # did not stop there itself
                             s.restore(saved[s.name])
-                            s.set("ag", a, sl)
-                            self._step(s, t, t1 - t, exact=False)
+                            self._stack_step(s, t, t1 - t, a, sl)
                 for p in partners:
                     p.free(saved[p.name])
             else:
@@ -373,28 +406,47 @@ class CoSimulation:
                     slopes = [(a - b) / (t - history[0]) for a, b in zip(a0, history[1])]
                 else:
                     slopes = [0.0] * len(entries)
-                for e, a, s in zip(entries, a0, slopes):
-                    e["stack"].set("ag", a, s)
                 saved = {s.name: s.save() for s in stacks if s.can_rollback and events == "stack-first"}
-                reached = [self._step(s, t, end - t, exact=False) for s in stacks]
+                reached = [self._stack_step(e["stack"], t, end - t, a, sl) for e, a, sl in zip(entries, a0, slopes)]
                 t1 = end
                 if events == "stack-first":
                     t1 = min(self._switch_time(s, t, end, r, H) for s, r in zip(stacks, reached))
                     if t1 < end:
                         self.landings += 1
-                        for e, s, r, a, sl in zip(entries, stacks, reached, a0, slopes):
-                            if abs(r - t1) > 1e-12 * max(1.0, t1):
-                                self.rollbacks += 1
-                                s.restore(saved[s.name])
-                                s.set("ag", a, sl)
-                                self._step(s, t, t1 - t, exact=False)
                 elif min(reached) < end - 1e-12 * max(1.0, end):
                     raise ConfigurationError("events='none' needs stacks created without early return")
+                for f in floors:
+                    self._step(f, t, t1 - t)
+                if saved and len(saved) == len(stacks):
+                    # The floor went to t1 with the exact mass and force: redo
+                    # the stacks' step with the chord of its acceleration (second
+                    # order), instead of the extrapolation that found t1.
+                    a1 = [e["floor"].get(e["accel"]) for e in entries]
+                    for e, a, b in zip(entries, a0, a1):
+                        s = e["stack"]
+                        s.restore(saved[s.name])
+                        self.rollbacks += 1
+                        chord = (b - a) / (t1 - t)
+                        here, first = t, t1
+                        while here < t1:  # an early return may stop short (if only by rounding)
+                            here = self._stack_step(s, here, t1 - here, a + chord * (here - t), chord)
+                            first = min(first, self._switch_time(s, t, t1, here, H))
+                        if first < t1 - SWITCH_SLACK * H:
+                            # The redo switched at `first`, before t1, where the
+                            # floor kept the old mass and force: the momentum it
+                            # missed goes to it over the next step.
+                            mass, sliding = s.get("attachedMass"), s.get("slidingForce")
+                            self.corrections += 1
+                            e["impulse"] += (-(mass - e["mass"]) * b + sliding - e["sliding"]) * (t1 - first)
+                elif t1 < end:  # no redo: the stacks that went past t1 go back to it
+                    for e, s, r, a, sl in zip(entries, stacks, reached, a0, slopes):
+                        if abs(r - t1) > 1e-12 * max(1.0, t1):
+                            self.rollbacks += 1
+                            s.restore(saved[s.name])
+                            self._stack_step(s, t, t1 - t, a, sl)
                 for s in stacks:
                     if s.name in saved:
                         s.free(saved[s.name])
-                for f in floors:
-                    self._step(f, t, t1 - t)
             # A slope through a switch means nothing: the history restarts there.
             # (a0 was read after the values at t were made consistent, so the
             # history may start at a landing, but not end at one.)
