@@ -276,11 +276,12 @@ class OpenSeesPartner(Partner):
     (variable steps). `add_mass(port, kg)` sets the node's mass to its own plus
     kg (ops.mass); `mobility(port)` = 1 / the node's own mass.
 
-    After an input or a mass changes, the next step first takes one analysis
-    step of `settle` seconds (1e-9 s), which makes the node's acceleration
-    consistent with the new load and mass: Newmark keeps the acceleration of
-    the last converged step, and a jump of the load left there would cost
-    (dt/2)·jump of velocity at every switch.
+    After an input or a mass jumps, the partner takes one analysis step of
+    `settle` seconds (1e-9 s) before its acceleration is read or it steps on,
+    and sets the clock back: that makes the node's acceleration consistent
+    with the new load and mass (Newmark keeps the acceleration of the last
+    converged step, and a jump of the load left there would cost (dt/2)·jump
+    of velocity at every switch).
 
     No rollback: OpenSees keeps its state in its domain, which openseespy
     cannot copy and restore in memory (the `database` command writes files and
@@ -406,25 +407,28 @@ class OpenSeesPartner(Partner):
     def _settle(self):
         """After a jump of a load or a mass: one analysis step of `settle`
         seconds, so that the node's acceleration is that of the new load and
-        mass (the time moves on by `settle`)."""
+        mass; the domain's time is then set back (ops.setTime)."""
         if self.dirty:
             self._patterns(self.ops.getTime())
         if self.unsettled:
             self.unsettled = False
+            now = self.ops.getTime()
             self._analyze(self.settle)
+            self.ops.setTime(now)  # an instantaneous re-equilibration: the clock stays
 
     def step(self, t: float, h: float) -> float:
         ops = self.ops
         now = ops.getTime()
-        if abs(now - t) > 2 * self.settle + 1e-12 * max(1.0, abs(t)):
+        if abs(now - t) > 1e-9 * max(1.0, abs(t)):
             raise ConfigurationError(f"{self.name}: asked to step from t = {t:.9g} but the model "
                                      f"is at {now:.9g} (OpenSees cannot roll back)")
         end = t + h
-        if end - now > 2 * self.settle:
-            self._settle()
+        self._settle()
         if self.dirty:
             self._patterns(ops.getTime())
         left = end - ops.getTime()
+        if left <= 0.0:
+            return end
         n = max(1, math.ceil(left / self.dt_max - 1e-9))
         for _ in range(n):
             self._analyze(left / n)
