@@ -373,6 +373,7 @@ class CoSimulation:
         self._sync(plan, t)
         self._sample(t, True)
         history = None  # (t, floor accelerations) at the last communication point
+        chords = None  # the floor accelerations' slopes over the last step (stack-first)
         while k < n_steps:
             end = min((k + 1) * H, stop)
             self._sync(plan, t)
@@ -404,6 +405,12 @@ class CoSimulation:
             else:
                 if extrapolation == "linear" and history is not None:
                     slopes = [(a - b) / (t - history[0]) for a, b in zip(a0, history[1])]
+                elif extrapolation == "linear" and chords is not None:
+                    # Just after a landing: the floor acceleration's slope over
+                    # the step that led to it (a jump of the acceleration at a
+                    # switch leaves its slope nearly unchanged; holding it would
+                    # miss a switch just after).
+                    slopes = list(chords)
                 else:
                     slopes = [0.0] * len(entries)
                 saved = {s.name: s.save() for s in stacks if s.can_rollback and events == "stack-first"}
@@ -411,6 +418,15 @@ class CoSimulation:
                 t1 = end
                 if events == "stack-first":
                     t1 = min(self._switch_time(s, t, end, r, H) for s, r in zip(stacks, reached))
+                    for e, s in zip(entries, stacks):
+                        ts = s.get("tSwitch") if self._has(s, "tSwitch") else math.nan
+                        if (t1 == end and t <= ts <= t + SWITCH_SLACK * H
+                                and (s.get("attachedMass"), s.get("slidingForce")) != (e["mass"], e["sliding"])):
+                            # A switch at the very start of the step, in a mode
+                            # that did not show it at t: the end of a creep (each
+                            # redo with the chord finds the switch a little after
+                            # the prediction's). Land just past it.
+                            t1 = ts + LANDING * H
                     if t1 < end:
                         self.landings += 1
                 elif min(reached) < end - 1e-12 * max(1.0, end):
@@ -422,6 +438,7 @@ class CoSimulation:
                     # the stacks' step with the chord of its acceleration (second
                     # order), instead of the extrapolation that found t1.
                     a1 = [e["floor"].get(e["accel"]) for e in entries]
+                    chords = [(b - a) / (t1 - t) for a, b in zip(a0, a1)]
                     for e, a, b in zip(entries, a0, a1):
                         s = e["stack"]
                         s.restore(saved[s.name])
