@@ -787,3 +787,109 @@ fn an_input_ramp_ends_where_its_slope_took_it() {
     assert_eq!(all_outputs(&mut ramped), all_outputs(&mut explicit));
     assert_eq!(real(&mut ramped, Id::Fext), f0 + q * h, "held");
 }
+
+/// The storey's directional derivatives (docs/coupling-ports.md): with
+/// respect to `Fext`, every Real output's against the central difference of
+/// `Fext ± 1` N set at a communication point where neither end changes a
+/// stick flag (the outputs are affine in `Fext` within a mode: rounding
+/// only, 1e-11 of the output's magnitude over the increment; the running
+/// peak of |apAbs| is skipped where it sits at |apAbs|, a max); `d apAbs /
+/// d Fext = 1 / (mp + the blocks stuck to the structure)`; nothing depends
+/// on `ag`.
+#[test]
+fn storey_directional_derivatives_match_finite_differences_within_a_mode() {
+    let (mp, alpha) = (1000.0, [0.25, 0.25, 0.1]);
+    let mut inst = initialized(
+        &[(Id::NBlocks, 3)],
+        &[
+            (Id::Mus(1), 0.15),
+            (Id::Muk(1), 0.1),
+            (Id::Mus(2), 0.08),
+            (Id::Muk(2), 0.05),
+            (Id::Mus(3), 0.05),
+            (Id::Muk(3), 0.05),
+            (Id::Alpha(3), alpha[2]),
+        ],
+    );
+    let reals: Vec<Id> = stacked_live_load::fmi::variables::table()
+        .into_iter()
+        .map(|v| v.id)
+        .filter(|id| id.causality() == Causality::Output && id.kind() == Kind::Real)
+        .collect();
+    let unknowns: Vec<u32> = reals.iter().map(|id| id.vr()).collect();
+    let stuck = |inst: &mut Instance| {
+        let mut s = [0; 3];
+        let vrs = [Id::Stuck(1).vr(), Id::Stuck(2).vr(), Id::Stuck(3).vr()];
+        assert_eq!(inst.get_boolean(&vrs, &mut s), Status::Ok);
+        s
+    };
+    let signal = Signal::new(7, 4.0);
+    let (h, mut checked, mut with_blocks) = (0.01, 0, 0);
+    for k in 0..300 {
+        let t = k as f64 * h;
+        step_along(&mut inst, &signal, t, t + h, t, t + h);
+        let fext = 200.0 * (0.3 * k as f64).sin();
+        set(&mut inst, Id::Fext, fext);
+        let flags = stuck(&mut inst);
+        let mut dd = vec![f64::NAN; unknowns.len()];
+        assert_eq!(
+            inst.directional_derivative(&unknowns, &[Id::Fext.vr()], &[1.0], &mut dd),
+            Status::Ok
+        );
+        let mut dag = vec![f64::NAN; unknowns.len()];
+        assert_eq!(
+            inst.directional_derivative(&unknowns, &[Id::Ag.vr()], &[1.0], &mut dag),
+            Status::Ok
+        );
+        assert!(dag.iter().all(|&x| x == 0.0), "nothing depends on ag");
+        let attached: f64 = flags
+            .iter()
+            .zip(alpha)
+            .take_while(|(s, _)| **s != 0)
+            .map(|(_, a)| a * mp)
+            .sum();
+        let i_ap = reals.iter().position(|&id| id == Id::ApAbs).unwrap();
+        let expected = 1.0 / (mp + attached);
+        assert!(
+            (dd[i_ap] - expected).abs() <= 1e-15 * expected,
+            "{} {expected}",
+            dd[i_ap]
+        );
+        let delta = 1.0;
+        let mut at = |f: f64| {
+            set(&mut inst, Id::Fext, f);
+            let values: Vec<f64> = reals.iter().map(|&id| real(&mut inst, id)).collect();
+            (values, stuck(&mut inst))
+        };
+        let (plus, flags_plus) = at(fext + delta);
+        let (minus, flags_minus) = at(fext - delta);
+        set(&mut inst, Id::Fext, fext);
+        if flags_plus != flags || flags_minus != flags {
+            continue;
+        }
+        let peak_at_value = (real(&mut inst, Id::ApAbs).abs() - real(&mut inst, Id::PeakApAbs))
+            .abs()
+            < 1e-9 * real(&mut inst, Id::PeakApAbs);
+        for (i, id) in reals.iter().enumerate() {
+            if *id == Id::PeakApAbs && peak_at_value {
+                continue;
+            }
+            let fd = (plus[i] - minus[i]) / (2.0 * delta);
+            let scale = plus[i].abs().max(minus[i].abs()).max(1e-3);
+            assert!(
+                (fd - dd[i]).abs() <= 1e-11 * scale / delta,
+                "d {} / d Fext at step {k}: directional {:e}, finite difference {fd:e}",
+                id.name(),
+                dd[i]
+            );
+        }
+        checked += 1;
+        if attached > 0.0 {
+            with_blocks += 1;
+        }
+    }
+    assert!(
+        checked > 100 && with_blocks > 20,
+        "{checked} points, {with_blocks} with blocks"
+    );
+}

@@ -828,3 +828,272 @@ fn a_sweep_over_every_offset_of_a_saved_state_never_panics_or_gives_nan() {
     eprintln!("{} offsets: NaN refused at {refused_nan}", blob.len() - 20);
     assert_eq!(inst.do_step(inst.last_successful_time(), 0.01), Status::Ok);
 }
+
+// ---- StackOnFloor (the second model of the binary) ----
+
+fn floor_instance() -> (Instance, Capture) {
+    let (mut inst, log) = instance();
+    inst.use_model(variables::Model::Floor);
+    (inst, log)
+}
+
+fn floor_init(setup: impl FnOnce(&mut Instance)) -> (Instance, Capture, Status) {
+    let (mut inst, log) = floor_instance();
+    assert_eq!(inst.setup_experiment(0.0, None), Status::Ok);
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    setup(&mut inst);
+    let status = inst.exit_initialization_mode();
+    (inst, log, status)
+}
+
+/// Every Real output of StackOnFloor; fails the test on a non-finite one.
+fn assert_floor_outputs_finite(inst: &mut Instance, what: &str) {
+    let ids: Vec<Id> = variables::Model::Floor
+        .table()
+        .into_iter()
+        .filter(|v| v.id.kind() == Kind::Real && v.id.causality() == Causality::Output)
+        .map(|v| v.id)
+        .collect();
+    let vrs: Vec<u32> = ids.iter().map(|id| id.vr()).collect();
+    let mut out = vec![f64::NAN; vrs.len()];
+    assert_eq!(inst.get_real(&vrs, &mut out), Status::Ok, "{what}");
+    for (id, x) in ids.iter().zip(&out) {
+        assert!(x.is_finite(), "{what}: {} = {x} behind fmi2OK", id.name());
+    }
+    let continuous: Vec<u32> = ids
+        .iter()
+        .filter(|id| id.is_continuous())
+        .map(|id| id.vr())
+        .collect();
+    for order in [1, 2] {
+        let mut d = vec![f64::NAN; continuous.len()];
+        let orders = vec![order; continuous.len()];
+        assert_eq!(
+            inst.get_output_derivatives(&continuous, &orders, &mut d),
+            Status::Ok,
+            "{what}"
+        );
+        assert!(d.iter().all(|x| x.is_finite()), "{what}: derivatives {d:?}");
+    }
+    let mut dd = vec![f64::NAN; vrs.len()];
+    assert_eq!(
+        inst.directional_derivative(&vrs, &[Id::Ag.vr()], &[1.0], &mut dd),
+        Status::Ok,
+        "{what}"
+    );
+    assert!(dd.iter().all(|x| x.is_finite()), "{what}: {dd:?}");
+}
+
+#[test]
+fn stack_on_floor_refuses_hostile_inputs_by_name() {
+    // Values refused when set, naming the variable and its range; the
+    // instance keeps its previous value and stays usable.
+    let cases: [(Id, f64, &str); 10] = [
+        (Id::Ag, f64::NAN, "ag = NaN"),
+        (Id::Ag, 1e7, "ag = 10000000 "),
+        (Id::Ag, f64::INFINITY, "ag = inf"),
+        (Id::M(2), -250.0, "m[2] = -250 "),
+        (Id::M(1), 0.0, "m[1] = 0 "),
+        (Id::M(8), 1e12, "m[8] = 1e12 "),
+        (Id::SupportMobility, -1e-3, "supportMobility = -0.001 "),
+        (Id::SupportMobility, f64::NAN, "supportMobility = NaN"),
+        (Id::SupportMobility, 1e10, "supportMobility = 1e10 "),
+        (Id::G, 0.0, "g = 0"),
+    ];
+    for (id, value, expected) in cases {
+        let (mut inst, log) = floor_instance();
+        assert_eq!(set(&mut inst, id, value), Status::Error, "{expected}");
+        let m = log.last();
+        assert!(m.starts_with(&format!("fmi2SetReal: {expected}")), "{m}");
+        assert!(m.contains("it must be"), "{m}");
+    }
+    let (mut inst, log) = floor_instance();
+    assert_eq!(set(&mut inst, Id::M(2), -1.0), Status::Error);
+    assert!(log.last().contains("(kg)"), "{}", log.last());
+    // nBlocks 0 and 9: a stack on a floor has 1 to 8 blocks.
+    for n in [0, 9, -1] {
+        let (mut inst, log) = floor_instance();
+        assert_eq!(inst.set_integer(&[Id::NBlocks.vr()], &[n]), Status::Error);
+        assert!(
+            log.last().contains(&format!(
+                "nBlocks = {n} is not allowed: it must be an integer from 1 to 8"
+            )),
+            "{}",
+            log.last()
+        );
+    }
+    // muk > mus: refused at the end of initialization, naming muk[1].
+    let (_, log, status) = floor_init(|inst| {
+        set(inst, Id::Mus(1), 0.1);
+        set(inst, Id::Muk(1), 0.2);
+    });
+    assert_eq!(status, Status::Error);
+    assert!(
+        log.last()
+            .starts_with("fmi2ExitInitializationMode: muk[1] = 0.2 is not allowed"),
+        "{}",
+        log.last()
+    );
+    // Storey-only variables do not exist here; nor does a derivative of the
+    // mobility; a slope that takes ag out of its range is refused.
+    let (mut inst, log, status) = floor_init(|_| {});
+    assert_eq!(status, Status::Ok);
+    assert_eq!(set(&mut inst, Id::Fext, 1.0), Status::Error);
+    assert!(
+        log.last().contains("unknown value reference 101"),
+        "{}",
+        log.last()
+    );
+    assert_eq!(
+        inst.set_input_derivatives(&[Id::SupportMobility.vr()], &[1], &[1.0]),
+        Status::Error
+    );
+    assert!(log
+        .last()
+        .contains("supportMobility is not a continuous Real input"));
+    assert_eq!(
+        inst.set_input_derivatives(&[Id::Ag.vr()], &[1], &[f64::NAN]),
+        Status::Error
+    );
+    set(&mut inst, Id::Ag, 9e5);
+    assert_eq!(
+        inst.set_input_derivatives(&[Id::Ag.vr()], &[1], &[1e9]),
+        Status::Ok
+    );
+    assert_eq!(inst.do_step(0.0, 1.0), Status::Error);
+    assert!(log.last().contains("outside its range"), "{}", log.last());
+    assert_eq!(inst.phase(), Phase::StepComplete);
+    assert_floor_outputs_finite(&mut inst, "after refused inputs");
+
+    // The largest allowed values: finite outputs, derivatives and
+    // directional derivatives behind fmi2OK.
+    let (mut inst, log, status) = floor_init(|inst| {
+        inst.set_integer(&[Id::NBlocks.vr()], &[8]);
+        for j in 1..=8 {
+            set(inst, Id::M(j), if j % 2 == 0 { 1e9 } else { 1e-9 });
+            set(inst, Id::Mus(j), 0.3);
+            set(inst, Id::Muk(j), 0.2);
+        }
+        set(inst, Id::SupportMobility, 1e9);
+    });
+    assert_eq!(status, Status::Ok, "{}", log.last());
+    for (k, ag) in [1e6, -1e6, 0.0, 3.0, -1e6].into_iter().enumerate() {
+        set(&mut inst, Id::Ag, ag);
+        assert_floor_outputs_finite(&mut inst, "largest values, before a step");
+        assert_eq!(
+            inst.do_step(k as f64 * 0.1, 0.1),
+            Status::Ok,
+            "{}",
+            log.last()
+        );
+        assert_floor_outputs_finite(&mut inst, "largest values");
+    }
+}
+
+/// Mutated saved states of StackOnFloor, restored into a StackOnFloor: any
+/// outcome but a panic or fmi2OK with a non-finite output.
+#[test]
+fn stack_on_floor_saved_states_survive_mutation() {
+    let mut rng = Rng(fuzz_seed() ^ 0xF100);
+    for case in 0..fuzz_cases(300) {
+        let (mut inst, _, status) = floor_init(|inst| {
+            let n = 1 + rng.below(8) as i32;
+            inst.set_integer(&[Id::NBlocks.vr()], &[n]);
+            for j in 1..=8 {
+                set(inst, Id::M(j), 10f64.powf(rng.uniform(0.0, 3.0)));
+                let mu = rng.uniform(0.02, 0.4);
+                set(inst, Id::Mus(j), mu * rng.uniform(1.0, 1.5));
+                set(inst, Id::Muk(j), mu);
+            }
+        });
+        assert_eq!(status, Status::Ok);
+        let mut t = 0.0;
+        for _ in 0..rng.below(6) {
+            set(&mut inst, Id::Ag, rng.uniform(-6.0, 6.0));
+            set(&mut inst, Id::SupportMobility, rng.uniform(0.0, 0.01));
+            assert_eq!(inst.do_step(t, 0.05), Status::Ok);
+            t += 0.05;
+        }
+        let blob = Instance::serialize(&inst.save().unwrap());
+        let mut bad = blob.clone();
+        mutate(&mut rng, &mut bad);
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let Ok(state) = Instance::deserialize(&bad) else {
+                return;
+            };
+            let (mut fresh, _) = floor_instance();
+            if fresh.restore(&state) != Status::Ok || fresh.phase() != Phase::StepComplete {
+                return;
+            }
+            let t = fresh.last_successful_time();
+            if fresh.do_step(t, 0.01) == Status::Ok {
+                assert_floor_outputs_finite(&mut fresh, "after a restored state");
+            }
+        }));
+        assert!(result.is_ok(), "case {case}: a mutated state panicked");
+    }
+}
+
+/// Through the C ABI: the StackOnFloor GUID gives a StackOnFloor; a GUID of
+/// neither model is refused with a logged reason naming both.
+#[test]
+fn the_guid_picks_the_model_and_a_wrong_one_is_refused() {
+    use stacked_live_load::fmi::c_api;
+    use std::ffi::{c_char, c_void, CStr, CString};
+    unsafe extern "C" fn logger(
+        env: *mut c_void,
+        _status: i32,
+        _category: *const c_char,
+        message: *const c_char,
+    ) {
+        let log = &mut *(env as *mut Vec<String>);
+        log.push(CStr::from_ptr(message).to_string_lossy().into_owned());
+    }
+    let mut log: Vec<String> = vec![];
+    let env = &mut log as *mut Vec<String> as *mut c_void;
+    let instantiate = |token: &str| {
+        let token = CString::new(token).unwrap();
+        unsafe {
+            c_api::fmi3::fmi3InstantiateCoSimulation(
+                c"g".as_ptr(),
+                token.as_ptr(),
+                std::ptr::null(),
+                false,
+                false,
+                false,
+                false,
+                std::ptr::null(),
+                0,
+                env,
+                Some(logger),
+                std::ptr::null(),
+            )
+        }
+    };
+    let bad = instantiate("{00000000-0000-0000-0000-000000000000}");
+    assert!(bad.is_null());
+    let floor = instantiate(c_api::FLOOR_GUID);
+    assert!(!floor.is_null());
+    unsafe {
+        // mp (a storey parameter) is unknown to a StackOnFloor.
+        assert_eq!(
+            c_api::fmi3::fmi3SetFloat64(floor, [1].as_ptr(), 1, [2.0].as_ptr(), 1),
+            3
+        );
+        assert_eq!(
+            c_api::fmi3::fmi3SetFloat64(floor, [Id::M(1).vr()].as_ptr(), 1, [-1.0].as_ptr(), 1),
+            3
+        );
+        c_api::fmi3::fmi3FreeInstance(floor);
+    }
+    let log = unsafe { &*(env as *mut Vec<String>) };
+    assert!(
+        log[0].contains("does not match any of this binary's models")
+            && log[0].contains(c_api::GUID)
+            && log[0].contains(c_api::FLOOR_GUID),
+        "{}",
+        log[0]
+    );
+    assert!(log[1].contains("unknown value reference 1"), "{}", log[1]);
+    assert!(log[2].contains("m[1] = -1 is not allowed"), "{}", log[2]);
+}

@@ -117,7 +117,7 @@ fn stack_on_floor_is_the_engines_prescribed_support_bit_for_bit() {
         };
         sim.set_support_mobility(mobility).unwrap();
         let now = sim.time();
-        sim.advance(now, &exc).unwrap();
+        // (one advance per step: the jump of ag at its start is the engine's)
         sim.advance(now + H, &exc).unwrap();
         let o = sim.outputs();
         let mut ids = vec![
@@ -300,17 +300,25 @@ fn directional_derivative_refuses_what_it_does_not_provide() {
         ),
         Status::Error
     );
-    // The storey does not provide them.
-    let (mut storey, log) = common::started(0.0, |_| {});
+    // The storey's: baseShear depends on no input; solver 3 has none.
+    let (mut storey, _) = common::started(0.0, |_| {});
     assert_eq!(
-        storey.directional_derivative(&[Id::BaseShear.vr()], &[Id::Ag.vr()], &[1.0], &mut out),
+        storey.directional_derivative(&[Id::BaseShear.vr()], &[Id::Fext.vr()], &[1.0], &mut out),
+        Status::Ok
+    );
+    assert_eq!(out[0], 0.0);
+    assert_eq!(
+        storey.directional_derivative(&[Id::ApAbs.vr()], &[Id::Mp.vr()], &[1.0], &mut out),
         Status::Error
     );
-    assert!(
-        log.last().contains("not provided by StackedLiveLoad"),
-        "{}",
-        log.last()
+    let (mut storey, log) = common::started(0.0, |inst| {
+        inst.set_integer(&[Id::Solver.vr()], &[3]);
+    });
+    assert_eq!(
+        storey.directional_derivative(&[Id::ApAbs.vr()], &[Id::Fext.vr()], &[1.0], &mut out),
+        Status::Error
     );
+    assert!(log.last().contains("not by solver 3"), "{}", log.last());
 }
 
 /// The dependencies in the generated model descriptions (FMI 2.0 by index,
@@ -584,4 +592,80 @@ fn output_derivatives_match_the_motion() {
         assert_eq!(inst.do_step(t, H - h), Status::Ok);
     }
     assert!(checked > 150);
+}
+
+/// FMI 3.0 with early return: StackOnFloor returns at every switch its FMI
+/// 2.0 counterpart reports in `tSwitch` (within 1e-9 s), driven by a record
+/// of the floor's acceleration (the default record: `recordFile`), and ends
+/// at the same state on the communication grid up to the switch times'
+/// rounding.
+#[test]
+fn fmi3_returns_early_at_every_switch() {
+    use stacked_live_load::fmi::instance::StepRequest;
+    let record = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("resources/default_record.csv")
+        .display()
+        .to_string();
+    let start = |early: bool| {
+        let (mut inst, log) = floor_instance();
+        inst.use_model(Model::Floor);
+        if early {
+            inst.use_fmi3(true, false);
+        }
+        assert_eq!(inst.setup_experiment(0.0, None), Status::Ok);
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        scene(&mut inst);
+        assert_eq!(
+            inst.set_string(&[Id::RecordFile.vr()], std::slice::from_ref(&record)),
+            Status::Ok
+        );
+        assert_eq!(
+            inst.exit_initialization_mode(),
+            Status::Ok,
+            "{}",
+            log.last()
+        );
+        inst
+    };
+    // FMI 2.0: the switch times of each 20 ms step.
+    let mut fmi2 = start(false);
+    let mut switches = vec![];
+    let h = 0.02;
+    for k in 0..300 {
+        let t = k as f64 * h;
+        assert_eq!(fmi2.do_step(t, h), Status::Ok);
+        let ts = real(&mut fmi2, Id::TSwitch);
+        if ts < t + h - 1e-10 {
+            switches.push(ts);
+        }
+    }
+    // FMI 3.0: an early return at each, none elsewhere.
+    let mut fmi3 = start(true);
+    fmi3.use_fmi3(true, false);
+    let mut returns = vec![];
+    for k in 0..300 {
+        let end = (k + 1) as f64 * h;
+        loop {
+            let t = fmi3.last_successful_time();
+            let out = fmi3.do_step_fmi3(StepRequest { t, h: end - t });
+            assert_eq!(out.status, Status::Ok);
+            if !out.early_return {
+                break;
+            }
+            returns.push(out.last_successful_time);
+        }
+    }
+    assert!(switches.len() > 5, "{} switches", switches.len());
+    assert!(returns.len() >= switches.len(), "{} returns", returns.len());
+    for ts in &switches {
+        assert!(
+            returns.iter().any(|r| (r - ts).abs() <= 1e-9),
+            "no early return at the switch at {ts}"
+        );
+    }
+    let (a, b) = (
+        real(&mut fmi2, Id::Efriction),
+        real(&mut fmi3, Id::Efriction),
+    );
+    assert!((a - b).abs() <= 1e-6 * a.abs(), "Efriction {a} vs {b}");
 }

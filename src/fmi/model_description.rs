@@ -62,11 +62,6 @@ fn write(w: &mut Writer<Vec<u8>>, model: Model) -> io::Result<()> {
     let description = model.description();
     let tool = tool();
     let variables = model.table();
-    let directional = if model == Model::Floor {
-        "true"
-    } else {
-        "false"
-    };
     w.create_element("fmiModelDescription")
         .with_attributes([
             ("fmiVersion", "2.0"),
@@ -88,7 +83,7 @@ fn write(w: &mut Writer<Vec<u8>>, model: Model) -> io::Result<()> {
                     ("canSerializeFMUstate", "true"),
                     ("canNotUseMemoryManagementFunctions", "true"),
                     ("canBeInstantiatedOnlyOncePerProcess", "false"),
-                    ("providesDirectionalDerivative", directional),
+                    ("providesDirectionalDerivative", "true"),
                 ])
                 .write_empty()?;
             write_units(w, &variables)?;

@@ -25,11 +25,6 @@ pub fn model_description_of(model: Model) -> String {
 fn write(w: &mut Writer<Vec<u8>>, model: Model) -> io::Result<()> {
     let tool = tool();
     let variables = model.table();
-    let directional = if model == Model::Floor {
-        "true"
-    } else {
-        "false"
-    };
     w.create_element("fmiModelDescription")
         .with_attributes([
             ("fmiVersion", "3.0"),
@@ -45,7 +40,7 @@ fn write(w: &mut Writer<Vec<u8>>, model: Model) -> io::Result<()> {
                     ("modelIdentifier", model.identifier()),
                     ("canGetAndSetFMUState", "true"),
                     ("canSerializeFMUState", "true"),
-                    ("providesDirectionalDerivatives", directional),
+                    ("providesDirectionalDerivatives", "true"),
                     ("providesAdjointDerivatives", "false"),
                     ("canBeInstantiatedOnlyOncePerProcess", "false"),
                     ("canHandleVariableCommunicationStepSize", "true"),

@@ -2,6 +2,7 @@
 //! (docs/coupling-ports.md): the outputs as the next step starts them, with
 //! the inputs set for that step in force, and their time derivatives there.
 
+use crate::fmi::variables::Id;
 use crate::physics::engine::{Excitation, Outputs, SimError, Simulator};
 use crate::physics::mode::{stick_capacity, Contact, Dynamics};
 use crate::physics::solver::Solver;
@@ -211,4 +212,51 @@ pub fn derivatives(next: &Simulator, exc: &Excitation) -> [Outputs; 2] {
     d1.e_friction = d1.e_friction_of.iter().sum();
     d2.e_friction = d2.e_friction_of.iter().sum();
     [d1, d2]
+}
+
+/// Derivative of the storey's output `unknown` with respect to input `known`
+/// within the mode of `next` (a simulator from [`exact_at_step_start`]),
+/// whose outputs at the communication point are `o`; `None` if `unknown` is
+/// not a Real output or `known` not an input of the storey.
+///
+/// Nothing depends on `ag` at once (docs/coupling-ports.md). `Fext` acts on
+/// the structure's cluster (mass `M0`): its absolute acceleration moves by
+/// `1/M0` per newton, so `d apAbs/d Fext = 1/M0` (the mobility of the storey's
+/// floor, which a StackOnFloor on it takes as `supportMobility`),
+/// `d abAbs[j]/d Fext = 1/M0` for a block of that cluster, `d F[j]/d Fext =
+/// M_above,j / M0` for a stuck interface in it; `d peakApAbs/d Fext` is
+/// `sign(apAbs)/M0` while `|apAbs|` is the running peak (the branch of the
+/// max that holds it), else 0; every other output: 0.
+pub fn directional(next: &Simulator, o: &Outputs, unknown: Id, known: Id) -> Option<f64> {
+    if !matches!(known, Id::Ag | Id::Fext) {
+        return None;
+    }
+    let (s, mode) = (next.system(), next.mode());
+    let d = Dynamics::new(s, mode);
+    let per_newton = if known == Id::Fext { d.inv_mass0 } else { 0.0 };
+    let in_structure = |j: usize| j <= s.n && d.cluster_of[j] == 0;
+    Some(match unknown {
+        Id::ApAbs => per_newton,
+        Id::PeakApAbs if o.ap_abs.abs() >= o.peak_ap_abs => o.ap_abs.signum() * per_newton,
+        Id::AbAbs(j) if in_structure(j) => per_newton,
+        Id::F(j) if in_structure(j) && mode.is_stuck(j) => d.force_affine(j, mode).0 * per_newton,
+        Id::Up
+        | Id::Vp
+        | Id::BaseShear
+        | Id::PeakUp
+        | Id::PeakApAbs
+        | Id::Einput
+        | Id::Ekinetic
+        | Id::Estrain
+        | Id::Eviscous
+        | Id::Efriction
+        | Id::TSwitch
+        | Id::AbAbs(_)
+        | Id::F(_)
+        | Id::Ub(_)
+        | Id::Vb(_)
+        | Id::Slip(_)
+        | Id::PeakSlip(_) => 0.0,
+        _ => return None,
+    })
 }

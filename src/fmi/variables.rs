@@ -816,7 +816,7 @@ fn floor_table() -> Vec<Variable> {
             "Mass of block {j} (block 1 rests on the support, block j on block j - 1)",
         ));
     }
-    let shared = |make: fn(usize) -> Id| (1..=MAX_BLOCKS).map(move |j| make(j));
+    let shared = |make: fn(usize) -> Id| (1..=MAX_BLOCKS).map(make);
     t.extend(shared(Id::Mus).chain(shared(Id::Muk)).map(from_storey));
     t.extend([Id::RecordFile, Id::RecordScale].map(from_storey));
     t.push(own(
@@ -931,5 +931,45 @@ mod tests {
         assert_eq!(with_range, settable);
         assert_eq!(Id::NBlocks.range(), Some((0.0, Some(8.0))));
         assert_eq!(Id::Solver.range(), Some((1.0, Some(3.0))));
+    }
+
+    #[test]
+    fn the_floor_table_shares_names_and_references_and_checks_its_ranges() {
+        let storey = table();
+        let floor = Model::Floor.table();
+        let mut seen = std::collections::HashSet::new();
+        for v in &floor {
+            assert!(seen.insert(v.id.vr()), "duplicate vr {}", v.id.vr());
+            assert!(Model::Floor.has(v.id), "{}", v.name);
+            assert_eq!(Model::Floor.lookup(v.id.vr()), Some(v.id));
+            // A name of both models has the same value reference.
+            if let Some(w) = storey.iter().find(|w| w.name == v.name) {
+                assert_eq!(w.id.vr(), v.id.vr(), "{}", v.name);
+            } else {
+                assert_eq!(Model::Storey.lookup(v.id.vr()), None, "{}", v.name);
+            }
+            if let Some((lo, hi)) = Model::Floor.range(v.id) {
+                if v.id.kind() == Kind::Real {
+                    assert!(v.id.check(lo).is_ok(), "{} min", v.name);
+                    assert!(
+                        v.id.check(lo - 1e-3 * lo.abs().max(1e-3)).is_err(),
+                        "{}",
+                        v.name
+                    );
+                    let hi = hi.expect("every Real range has a max");
+                    assert!(v.id.check(hi).is_ok(), "{} max", v.name);
+                    assert!(v.id.check(hi * (1.0 + 1e-9)).is_err(), "{} above", v.name);
+                }
+            }
+        }
+        for v in &storey {
+            assert!(Model::Storey.has(v.id), "{}", v.name);
+        }
+        assert_eq!(Model::Floor.range(Id::NBlocks), Some((1.0, Some(8.0))));
+        assert_eq!(Id::M(2).check(-1.0).unwrap_err().field, "m[2]");
+        assert!(Model::Floor.lookup(Id::Mp.vr()).is_none());
+        assert!(Model::Storey.lookup(Id::SupportMobility.vr()).is_none());
+        assert_eq!(Model::from_token(Model::Floor.guid()), Some(Model::Floor));
+        assert_eq!(Model::from_token("{}"), None);
     }
 }

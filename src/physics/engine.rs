@@ -49,6 +49,7 @@ pub use pieces::{
     ACCURATE_MAX_STEP, EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
     STABLE_H_OMEGA,
 };
+pub use proofs::PRESCRIBED_MAX_STEP;
 pub use report::{Outputs, SimError, Stats};
 use structure_rk4::{move_bodies, upper_cluster_step, Structure, StructureRk4};
 
@@ -143,9 +144,11 @@ impl Simulator {
         Ok(sim)
     }
 
-    /// Back to rest at t = 0 with the same scene.
+    /// Back to rest at t = 0 with the same scene (and support mobility).
     pub fn reset(&mut self) {
+        let mobility = self.sys.mobility;
         *self = Simulator::new(&self.params, &self.settings).expect("validated before");
+        self.sys.mobility = mobility;
     }
 
     /// Sets the displacement and velocity of every body (relative to the
@@ -362,7 +365,9 @@ impl Simulator {
     }
 
     /// Checks a piece from the current time and acts on a jump of the
-    /// external force (it can break a stick; `ag` cannot).
+    /// external force (it can break a stick; `ag` cannot, but on a
+    /// prescribed support, where it is the support's acceleration and a
+    /// non-zero `Fext` is refused).
     fn begin_piece(&mut self, t_end: f64, exc: &Excitation) -> Result<Piece, SimError> {
         exc.check(self.t, t_end)?;
         let prescribed = self.sys.prescribed();

@@ -134,3 +134,51 @@ def test_aarch64_library_under_qemu(fmus, native, version, tmp_path):
     cc(gcc, tmp_path / "harness", "-ldl")
     got = run([qemu, "-L", str(sysroot), str(tmp_path / "harness"), str(lib), guid(), str(RECORD)])
     check_same(f"FMI {version}.0 aarch64 library under qemu", got, native)
+
+
+# StackOnFloor: the same library under the model's name, in both FMUs.
+FLOOR_FMUS = {2: ROOT / "target" / "fmu" / "StackOnFloor.fmu",
+              3: ROOT / "target" / "fmu" / "fmi3" / "StackOnFloor.fmu"}
+RUN_FLOOR = ROOT / "tests" / "c" / "run_floor.c"
+
+
+def floor_guid() -> str:
+    text = (ROOT / "src" / "fmi" / "c_api" / "mod.rs").read_text()
+    return re.search(r'FLOOR_GUID: &str = "(\{[0-9a-f-]+\})"', text).group(1)
+
+
+def test_stack_on_floor_fmus_carry_the_same_binaries(fmus):
+    for version, fmu in fmus.items():
+        def binaries(path: Path) -> dict[str, bytes]:
+            with zipfile.ZipFile(path) as z:
+                return {n: z.read(n) for n in z.namelist()
+                        if n.startswith("binaries/") and not n.endswith("/")}
+        storey = binaries(fmu)
+        expected = {n.replace("/StackedLiveLoad.", "/StackOnFloor."): b for n, b in storey.items()}
+        assert binaries(FLOOR_FMUS[version]) == expected
+
+
+def test_stack_on_floor_under_qemu(fmus, tmp_path):
+    """tests/c/run_floor.c (StackOnFloor through the FMI 2.0 ABI, %.17g per
+    step) on the aarch64 library of StackOnFloor.fmu prints what it prints on
+    x86-64 Linux, digit for digit."""
+    qemu = shutil.which("qemu-aarch64") or shutil.which("qemu-aarch64-static")
+    gcc = shutil.which("aarch64-linux-gnu-gcc")
+    sysroot = Path("/usr/aarch64-linux-gnu")
+    if not (qemu and gcc and sysroot.exists()):
+        pytest.skip("qemu-aarch64 or aarch64-linux-gnu-gcc not installed (scripts/setup.sh)")
+    lib = extract(FLOOR_FMUS[2], FOLDERS["arm"][0], tmp_path)
+    if lib is None:
+        pytest.skip("the FMU carries no aarch64 library: the cross build was left out")
+
+    def build(compiler: str, out: Path) -> None:
+        subprocess.run([compiler, "-std=gnu11", "-Wall", "-Werror", "-I", str(ROOT / "include"),
+                        str(RUN_FLOOR), "-ldl", "-o", str(out)], check=True)
+
+    build("cc", tmp_path / "native")
+    native = run([str(tmp_path / "native"),
+                  str(ROOT / "target" / "release" / "libstacked_live_load.so"), floor_guid()])
+    build(gcc, tmp_path / "arm")
+    got = run([qemu, "-L", str(sysroot), str(tmp_path / "arm"), str(lib), floor_guid()])
+    assert len(native.splitlines()) == 300
+    assert got == native

@@ -13,7 +13,7 @@
 
 use crate::fmi::ports::SWITCH_LOOKAHEAD;
 use crate::fmi::variables::Id;
-use crate::physics::engine::{Excitation, Outputs, SimError, Simulator};
+use crate::physics::engine::{Excitation, Outputs, SimError};
 use crate::physics::params::{ParamError, Params, Support, MAX_BLOCKS};
 use crate::physics::solver::{Solver, Stepper};
 
@@ -49,8 +49,8 @@ pub fn public_error(p: &Params, e: ParamError) -> ParamError {
 /// The block masses of a StackOnFloor scene (kg), index j - 1.
 pub fn masses(p: &Params) -> [f64; MAX_BLOCKS] {
     let mut m = [0.0; MAX_BLOCKS];
-    for j in 0..p.n_blocks {
-        m[j] = p.alpha[j] * p.mp;
+    for (mj, alpha) in m.iter_mut().zip(&p.alpha).take(p.n_blocks) {
+        *mj = alpha * p.mp;
     }
     m
 }
@@ -113,28 +113,16 @@ pub fn directional(o: &Outputs, p: &Params, unknown: Id, known: Id) -> Option<f6
     })
 }
 
-/// Gives the simulator the support's mobility (1/kg) it resolves modes with.
-pub fn set_mobility(sim: &mut Solver, mobility: f64) -> Result<(), ParamError> {
-    match sim {
-        Solver::Exact(s) => set_exact_mobility(s, mobility),
-        // StackOnFloor builds the exact engine only.
-        Solver::Regularized(_) => Ok(()),
-    }
-}
-
-fn set_exact_mobility(sim: &mut Simulator, mobility: f64) -> Result<(), ParamError> {
-    sim.set_support_mobility(mobility)
-}
-
 /// Applies the inputs set for the next step at the current instant: the
 /// support's mobility, and `ag` (a jump of it can break a stick of the
 /// cluster attached to the support). The engine acts on a jump only: with
 /// `ag` unchanged this changes nothing.
 pub fn take_inputs(sim: &mut Solver, exc: &Excitation, mobility: f64) -> Result<(), SimError> {
-    set_mobility(sim, mobility).map_err(|e| SimError::BadInput {
-        name: "supportMobility",
-        value: e.value,
-    })?;
+    sim.set_support_mobility(mobility)
+        .map_err(|e| SimError::BadInput {
+            name: "supportMobility",
+            value: e.value,
+        })?;
     let now = sim.time();
     sim.advance(now, exc)
 }

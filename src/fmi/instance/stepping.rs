@@ -372,8 +372,8 @@ impl Instance {
     /// fmi2GetDirectionalDerivative (and fmi3GetDirectionalDerivative):
     /// `out[i] = sum_k d unknowns[i] / d knowns[k] * seed[k]` at the current
     /// communication point, in the mode the next step starts in, for Real
-    /// outputs with respect to inputs (StackOnFloor only; see
-    /// [`floor::directional`]). `seed` has one entry per known, `out` one
+    /// outputs with respect to inputs ([`floor::directional`],
+    /// [`ports::directional`]). `seed` has one entry per known, `out` one
     /// per unknown.
     pub fn directional_derivative(
         &mut self,
@@ -385,16 +385,6 @@ impl Instance {
         const F: &str = "fmi2GetDirectionalDerivative";
         if let Err(s) = self.require(F) {
             return s;
-        }
-        if self.model != Model::Floor {
-            return self.error(
-                F,
-                format!(
-                    "directional derivatives are not provided by {} (providesDirectionalDerivative \
-                     is false; its outputs' dependencies are in the model description)",
-                    self.model.identifier()
-                ),
-            );
         }
         if seed.len() != knowns.len() || out.len() != unknowns.len() {
             return self.error(
@@ -420,8 +410,12 @@ impl Instance {
                     F,
                     format!(
                         "{} is not an input: the knowns of a directional derivative are inputs \
-                         (ag, supportMobility)",
-                        name_of(id)
+                         ({})",
+                        name_of(id),
+                        match self.model {
+                            Model::Floor => "ag, supportMobility",
+                            Model::Storey => "ag, Fext",
+                        }
                     ),
                 );
             }
@@ -460,10 +454,32 @@ impl Instance {
             Ok(o) => o.clone(),
             Err(s) => return s,
         };
+        // The storey: in the mode the next step starts in, as its outputs.
+        let storey = match (self.model, &self.d.sim) {
+            (Model::Floor, _) => None,
+            (Model::Storey, Some(Solver::Exact(sim))) => {
+                match ports::exact_at_step_start(sim, &self.next_excitation()) {
+                    Ok(next) => Some(next),
+                    Err(e) => return self.error(F, e.to_string()),
+                }
+            }
+            (Model::Storey, _) => {
+                return self.error(
+                    F,
+                    "directional derivatives are provided by solvers 1 and 2, not by solver 3 \
+                     (the regularized baseline)",
+                )
+            }
+        };
         for (slot, &unknown) in out.iter_mut().zip(&unknown_ids) {
-            let mut sum = 0.0;
+            // -0.0: the identity of IEEE addition (a single term comes out unchanged).
+            let mut sum = -0.0;
             for (&known, &dv) in known_ids.iter().zip(seed) {
-                match floor::directional(&o, &params, unknown, known) {
+                let derivative = match &storey {
+                    Some(next) => ports::directional(next, &o, unknown, known),
+                    None => floor::directional(&o, &params, unknown, known),
+                };
+                match derivative {
                     Some(d) => sum += d * dv,
                     None => {
                         return self.error(

@@ -36,7 +36,10 @@ impl Simulator {
             was_stuck: self.stuck_mask(),
             load0: self.resolve_load0(),
         };
-        let res = mode::resolve(&self.sys, &req);
+        let mut res = mode::resolve(&self.sys, &req);
+        if self.sys.prescribed() && self.sys.mobility != 0.0 {
+            res = self.held_unless_consistent(res, &req);
+        }
         self.tries += u64::from(res.tries);
         if !res.consistent {
             self.stats.inconsistent += 1;
@@ -57,6 +60,28 @@ impl Simulator {
             self.dyn_cache
                 .load(&self.sys, &self.mode, &mut self.dynamics);
         }
+    }
+
+    /// On a prescribed support with a mobility: the resolution `res` (taken
+    /// with the mobility), unless the support's own acceleration `ag` —
+    /// which it follows until its inputs change — contradicts its mode (a
+    /// stick `ag` breaks, a slip `ag` turns back): then the resolution of
+    /// the support held at `ag` (mobility 0), a mode `ag` keeps. Without
+    /// this, the contradicted mode would fire again at once, and a very
+    /// mobile support (a floor far lighter than the stack) could switch back
+    /// and forth at one instant.
+    fn held_unless_consistent(&self, res: mode::Resolved, req: &ResolveRequest) -> mode::Resolved {
+        let mut held = self.sys.clone();
+        held.mobility = 0.0;
+        let a_s = self.load0();
+        if res.consistent
+            && mode::violation(&held, &res.mode, req.zero, a_s) <= mode::CONSISTENCY_TOL
+        {
+            return res;
+        }
+        let mut again = mode::resolve(&held, &ResolveRequest { load0: a_s, ..*req });
+        again.tries += res.tries;
+        again
     }
 
     /// Acts on guards that have fired at the current instant: a slipping
