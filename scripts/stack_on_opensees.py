@@ -22,9 +22,7 @@ table is the interface-Jacobian master at H = 0.1 ms (self-convergence): the
 reference and the runs take the same analysis steps except around switch
 landings, so that Newmark's own error (a phase error of (w dt)^2/12 per
 radian, 2e-6 for the third mode at 0.1 ms) largely cancels and the table
-shows the coupling's (with the reference at H = 0.25 ms, three steps of
-0.083 ms, the interface-Jacobian master's drift error on the yielding frame
-stalled at 3e-5; with shared steps it converges at second order).
+shows the coupling's.
 """
 
 from __future__ import annotations
@@ -187,7 +185,7 @@ def checks(ground, out: Path) -> list[str]:
                  f"switches; peak drift {peak_up * 1000:.2f} mm, peak slips "
                  f"{exact_slips[0] * 1000:.1f} / {exact_slips[1] * 1000:.1f} mm). OpenSees' Newmark at "
                  f"{DT_FRAME * 1000} ms has an error of its own, (w dt)^2 / 12 = "
-                 f"{(2 * math.pi / T1 * DT_FRAME) ** 2 / 12:.1g} in phase per cycle:")
+                 f"{(2 * math.pi / T1 * DT_FRAME) ** 2 / 12:.1g} in phase per radian:")
     lines.append("")
     lines.append("| H (ms) | drift error (of peak) | peak drift error | peak slip error (worst block) |")
     lines.append("| --- | --- | --- | --- |")
