@@ -115,7 +115,7 @@ def couple(ground, yielding: bool, master: str, extrapolation: str, H: float, st
     record = [r for r in RECORDED if int(r[11]) <= n] if n < 3 else RECORDED
     try:
         run = sim.run(float(ground[0][-1]), H, master=master, extrapolation=extrapolation,
-                      order=["frame", "stack"], record=record)
+                      order=["frame", "stack"], record=record, consistent=False)
         run["peakSlip"] = [stack.get(f"peakSlip[{j}]") for j in (1, 2)]
         run["failed"] = ""
     except RuntimeError as e:

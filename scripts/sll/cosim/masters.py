@@ -14,9 +14,12 @@ Masters:
 - "gauss-seidel": partners step one after the other in `order`; a partner
   takes the inputs of partners already at t + H from their new values (the chord
   between t and t + H, or the newest value held with constant extrapolation);
-- extrapolation "constant" (zero-order hold) or "linear" (the slope through the
-  last two communication points, handed to partners that take input slopes:
-  FMI 2.0 FMUs that canInterpolateInputs, OpenSeesPartner);
+- extrapolation "constant" (zero-order hold), "linear" (the slope through the
+  last two communication points) or "derivative" (the partners' output
+  derivatives), handed to partners that take input slopes (FMI 2.0 FMUs that
+  canInterpolateInputs, OpenSeesPartner); `consistent` reads an output that
+  depends on an input at once after that input was set; `event_aware` rolls
+  every partner back to land just past a switch a partner reports (tSwitch);
 - "interface-jacobian": for stacks on floors (connections `S.floorForce -> P.X`
   and `P.Y -> S.ag`, gains +1): the stack's `attachedMass` goes into the
   floor partner's mass at X (add_mass), its `slidingForce` (constant between
@@ -45,7 +48,7 @@ import numpy as np
 from .partners import ConfigurationError, Partner
 
 MASTERS = ("jacobi", "gauss-seidel", "interface-jacobian")
-EXTRAPOLATIONS = ("constant", "linear")
+EXTRAPOLATIONS = ("constant", "linear", "derivative")
 EVENTS = ("auto", "rollback", "stack-first", "none")
 # A switch closer than this fraction of H to the step's start is the one just
 # landed on; the landing on a switch reported by tSwitch goes this fraction of H
@@ -128,7 +131,7 @@ class CoSimulation:
     # ----------------------------------------------------------------- run
     def run(self, stop: float, H: float, master: str = "jacobi", extrapolation: str = "linear",
             order: list[str] | None = None, events: str = "auto", record=(),
-            held_substeps: int = 4) -> dict:
+            held_substeps: int = 4, consistent: bool = True, event_aware: bool = False) -> dict:
         """Couples the partners from 0 to `stop` with macro step H (the last
         step is shorter when H does not divide stop). Returns time (every
         communication point, switch landings included), on_grid (which are not
@@ -136,7 +139,14 @@ class CoSimulation:
         steps (per partner), rollbacks, landings, seconds. `held_substeps`:
         the interface-Jacobian master steps a stack that holds its inputs (FMI
         3.0) in this many pieces per step, each with the floor acceleration at
-        its middle."""
+        its middle. For Jacobi and Gauss-Seidel: `consistent` (read outputs
+        that depend on inputs after those are set, sweeping until nothing
+        changes; False: every output read once right after the step, as a
+        plain importer does) and `event_aware` (every partner saves its
+        state; when one reports a tSwitch inside the step, all go back and
+        step to just past it)."""
+        if extrapolation == "derivative" and master == "interface-jacobian":
+            raise ConfigurationError("extrapolation='derivative' is for jacobi and gauss-seidel")
         if int(held_substeps) < 1:
             raise ConfigurationError(f"held_substeps = {held_substeps}: at least 1")
         self.held_substeps = int(held_substeps)
@@ -170,7 +180,7 @@ class CoSimulation:
         started = time.perf_counter()
         n_steps = math.ceil(stop / H - 1e-9)
         if plan is None:
-            self._classic(stop, H, n_steps, master, extrapolation, order)
+            self._classic(stop, H, n_steps, master, extrapolation, order, consistent, event_aware)
         else:
             self._interface(stop, H, n_steps, plan, extrapolation)
         result = {k: np.array(v) for k, v in self.out.items()}
@@ -180,44 +190,115 @@ class CoSimulation:
         return result
 
     # ---------------------------------------------- jacobi and gauss-seidel
-    def _classic(self, stop, H, n_steps, master, extrapolation, order):
-        sources = sorted({c.source for c in self.connections})
-        previous = None
-        t = 0.0
-        self._sample(t, True)
-        for k in range(n_steps):
-            end = min((k + 1) * H, stop)
-            h = end - t
-            y0 = {s: self._get(s) for s in sources}
-            slope = dict.fromkeys(sources, 0.0)
-            if extrapolation == "linear" and previous is not None:
-                tp, yp = previous
-                slope = {s: (y0[s] - yp[s]) / (t - tp) for s in sources}
-            previous = (t, y0)
-            if master == "jacobi":
+    def _exchange(self, t: float, sources: list[str], extrapolation: str, consistent: bool, previous):
+        """Values (and slopes) of every connected output at t, set on the
+        inputs. `consistent`: read and set again until no value changes, so
+        that an output that depends on an input at once (a storey's apAbs on
+        its Fext) is read after that input was set (as many sweeps as the
+        longest chain of such dependencies, plus one that changes nothing);
+        otherwise every output is read once, before any input is set (as a
+        plain importer does). Slopes: "linear" through the last two
+        communication points, "derivative" from the partners' output
+        derivatives (swept likewise: a derivative may depend on an input's
+        slope), "constant" none."""
+        y = {s: self._get(s) for s in sources}
+        if consistent:
+            for _ in range(len(self.partners) + 1):
                 for c in self.connections:
+                    self._set(c, y[c.source], 0.0)
+                again = {s: self._get(s) for s in sources}
+                if again == y:
+                    break
+                y = again
+        slope = dict.fromkeys(sources, 0.0)
+        if extrapolation == "linear" and previous is not None:
+            tp, yp = previous
+            slope = {s: (y[s] - yp[s]) / (t - tp) for s in sources}
+        elif extrapolation == "derivative":
+            for _ in range(len(self.partners) + 1):
+                for c in self.connections:
+                    self._set(c, y[c.source], slope[c.source])
+                again = {s: self._derivative(s) for s in sources}
+                if again == slope:
+                    break
+                slope = again
+        for c in self.connections:
+            self._set(c, y[c.source], slope[c.source])
+        return y, slope
+
+    def _derivative(self, name: str) -> float:
+        partner, _, port = name.partition(".")
+        return self.partners[partner].output_derivative(port)
+
+    def _classic_step(self, t, h, y0, slope, master, extrapolation, order, landing=False):
+        """Every partner from t to t + h. A landing (event-aware) steps every
+        partner from the values at t: a Gauss-Seidel chord would reach across
+        the switch's jump."""
+        if master == "jacobi" or landing:
+            for c in self.connections:
+                self._set(c, y0[c.source], slope[c.source])
+            for p in self.partners.values():
+                self._step(p, t, h)
+            return
+        done = set()
+        for name in order:
+            p = self.partners[name]
+            for c in self.connections:
+                if c.split("target")[0] != name:
+                    continue
+                if c.split("source")[0] in done:
+                    y1 = self._get(c.source)
+                    if extrapolation == "constant" or not p.takes_slopes:
+                        self._set(c, y1, 0.0)
+                    else:
+                        self._set(c, y0[c.source], (y1 - y0[c.source]) / h)
+                else:
                     self._set(c, y0[c.source], slope[c.source])
-                for p in self.partners.values():
-                    self._step(p, t, h)
+            self._step(p, t, h)
+            done.add(name)
+
+    def _classic(self, stop, H, n_steps, master, extrapolation, order, consistent=True, event_aware=False):
+        sources = sorted({c.source for c in self.connections})
+        partners = list(self.partners.values())
+        switching = [p for p in partners if self._has(p, "tSwitch")]
+        if event_aware:
+            cannot = [p.name for p in partners if not p.can_rollback]
+            if cannot:
+                raise ConfigurationError(f"event_aware: {', '.join(cannot)} cannot roll back (save/restore)")
+            if not switching:
+                raise ConfigurationError("event_aware: no partner has a tSwitch output")
+        previous = None
+        t, k = 0.0, 0
+        self._sample(t, True)
+        while k < n_steps:
+            end = min((k + 1) * H, stop)
+            y0, slope = self._exchange(t, sources, extrapolation, consistent, previous)
+            previous = (t, y0)
+            if not event_aware:
+                self._classic_step(t, end - t, y0, slope, master, extrapolation, order)
+                t, k = end, k + 1
+                self._sample(t, True)
+                continue
+            saved = {p.name: p.save() for p in partners}
+            self._classic_step(t, end - t, y0, slope, master, extrapolation, order)
+            first = min(p.get("tSwitch") for p in switching)
+            if t + SWITCH_SLACK * H < first < end - SWITCH_SLACK * H:
+                # A switch inside: every partner back to t, then to just past
+                # the switch with the same inputs, so that it happens under
+                # the inputs that predicted it (docs/coupling.md).
+                for p in partners:
+                    p.restore(saved[p.name])
+                self.rollbacks += 1
+                landing = first + LANDING * H
+                self._classic_step(t, landing - t, y0, slope, master, extrapolation, order, landing=True)
+                t = landing
+                self._sample(t, False)
+                previous = None  # a slope through the switch means nothing
             else:
-                done = set()
-                for name in order:
-                    p = self.partners[name]
-                    for c in self.connections:
-                        if c.split("target")[0] != name:
-                            continue
-                        if c.split("source")[0] in done:
-                            y1 = self._get(c.source)
-                            if extrapolation == "constant" or not p.takes_slopes:
-                                self._set(c, y1, 0.0)
-                            else:
-                                self._set(c, y0[c.source], (y1 - y0[c.source]) / h)
-                        else:
-                            self._set(c, y0[c.source], slope[c.source])
-                    self._step(p, t, h)
-                    done.add(name)
-            t = end
-            self._sample(t, True)
+                t, k = end, k + 1
+                self._sample(t, True)
+            for p in partners:
+                p.free(saved[p.name])
 
     # ---------------------------------------------------- interface Jacobian
     def _interface_plan(self, events: str) -> dict:

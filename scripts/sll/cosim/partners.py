@@ -71,6 +71,9 @@ class Partner:
     def free(self, state) -> None:
         pass
 
+    def output_derivative(self, port: str, order: int = 1) -> float:
+        raise NotSupported(f"{self.name}: gives no derivative of {port!r}")
+
     def add_mass(self, port: str, kg: float) -> None:
         raise NotSupported(f"{self.name}: cannot add mass at {port!r} (no add_mass)")
 
