@@ -286,9 +286,10 @@ class OpenSeesPartner(Partner):
     converged step, and a jump of the load left there would cost (dt/2)·jump
     of velocity at every switch).
 
-    No rollback: OpenSees keeps its state in its domain, which openseespy
-    cannot copy and restore in memory (the `database` command writes files and
-    is not built into every openseespy); `can_rollback` is False."""
+    No rollback: OpenSees keeps its state in its domain, and openseespy has no
+    call that copies it to memory and back; its `database`/`save`/`restore`
+    commands go through files and were not tried here. `can_rollback` is
+    False."""
 
     takes_slopes = True
     can_add_mass = True
