@@ -31,11 +31,9 @@ import csv
 import math
 import statistics
 import subprocess
-import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import use_venv  # noqa: E402,F401  (re-runs this script under the repository's .venv if needed)
 import matplotlib  # noqa: E402
 
@@ -43,7 +41,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sll import ROOT, Model, opensees_block, read_record  # noqa: E402
 
 G = 9.81

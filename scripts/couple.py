@@ -20,10 +20,8 @@ from __future__ import annotations
 
 import argparse
 import csv
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import use_venv  # noqa: E402,F401  (re-runs this script under the repository's .venv if needed)
 import matplotlib  # noqa: E402
 
@@ -32,7 +30,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sll.coupling import (EXTRAPOLATIONS, MASTERS, Building, broadband_record, drift_error,  # noqa: E402
                       exact_building, observed_order)
 

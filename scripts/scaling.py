@@ -19,7 +19,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import use_venv  # noqa: E402,F401  (re-runs this script under the repository's .venv if needed)
 import matplotlib  # noqa: E402
 

@@ -8,6 +8,12 @@ fi
 if ! .venv/bin/python -c "import fmpy, numpy, scipy, matplotlib, pytest, reqpy_M, dask, distributed, openseespy, fmu_manipulation_toolbox" 2>/dev/null; then
   .venv/bin/pip install --quiet --disable-pip-version-check -r requirements.txt
 fi
+# The sll package (scripts/sll, pyproject.toml), editable: anything run with .venv's
+# python imports this checkout's copy, without editing sys.path.
+if [ "$(.venv/bin/python -c 'import pathlib, sll; print(pathlib.Path(sll.__file__).resolve().parents[2])' 2>/dev/null)" != "$(pwd -P)" ]; then
+  .venv/bin/pip install --quiet --disable-pip-version-check --no-deps -e . \
+    || echo "setup: could not install the sll package (pip install -e .); the scripts find it beside them and pytest through pyproject.toml's pythonpath" >&2
+fi
 # openseespy's binary needs the system BLAS/LAPACK (Debian: libblas3, liblapack3).
 # Without them the OpenSees points of the accuracy chart are left out, with a notice.
 if ! ldconfig -p | grep -q "libblas.so.3"; then

@@ -14,10 +14,8 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import use_venv  # noqa: E402,F401  (re-runs this script under the repository's .venv if needed)
 import matplotlib  # noqa: E402
 

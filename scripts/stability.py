@@ -29,11 +29,9 @@ from __future__ import annotations
 import argparse
 import csv
 import math
-import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import use_venv  # noqa: E402,F401  (re-runs this script under the repository's .venv if needed)
 import matplotlib  # noqa: E402
 
@@ -42,7 +40,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sll import Model  # noqa: E402
 
 G = 9.81

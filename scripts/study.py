@@ -53,7 +53,6 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 SCRIPTS = Path(__file__).resolve().parent
-sys.path.insert(0, str(SCRIPTS))
 import use_venv  # noqa: E402,F401  (re-runs this script under the repository's .venv if needed)
 import numpy as np  # noqa: E402
 

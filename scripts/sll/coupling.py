@@ -35,26 +35,23 @@ fmi2SetRealInputDerivatives, order 1):
 stick/slip switch fell inside, every storey is restored to its state at t
 (fmi2SetFMUstate) and the step is redone to just past the earliest switch,
 so the next extrapolation starts from the values after the switch.
+The masters themselves are sll.cosim's (CoSimulation over FMUPartner
+instances): this module names the storeys' links and adds the exact reference.
 """
 
 from __future__ import annotations
 
 import math
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 from scipy.linalg import expm
 
-from sll import Model, read_record
+from sll import Model, fmu_path, read_record
 
 MASTERS = ("jacobi", "gauss-seidel")
 EXTRAPOLATIONS = ("hold", "history", "derivative")
-# A switch closer than this fraction of H to the step's start is the one the
-# master just landed on: rolling back for it again would loop.
-SWITCH_SLACK = 1e-6
-LANDING = 1e-7  # how far past a switch (fraction of H) the event-aware master lands
 
 
 # ---------------------------------------------------------------- records
@@ -190,64 +187,22 @@ def exact_building(storeys: list[dict], record, times, defaults: dict | None = N
     return {"time": times, "x": x, "up": up, "apAbs": ap_abs, "never_slips": not any(slips)}
 
 
-# ----------------------------------------------------------------- storeys
-
-class Storey:
-    """One FMU instance as a storey: its ports by value reference."""
-
-    def __init__(self, index: int, model: Model, params: dict, record_file: str = "",
-                 loaded: list[Model] = ()):
-        self.index, self.model, self.params, self.record_file = index, model, dict(params), record_file
-        # fmpy's logger proxy is process-wide: a message may land in the list
-        # of whichever Model registered last, so look in all of them.
-        self.loaded = list(loaded) or [model]
-        self.slave = model.slave
-        self.vr = {n: model.vr(n) for n in ("ag", "Fext", "apAbs", "baseShear")}
-        self.has_tswitch = "tSwitch" in model.vars
-
-    def start(self, stop: float):
-        for m in self.loaded:
-            m.messages.clear()
-        try:
-            self.n_blocks = self.model.start(self.params, stop, self.record_file)
-        except Exception as e:  # a parameter the FMU refused: its message names it and the range
-            raise ValueError(f"storey {self.index}: {self.said(e)}") from None
-
-    def said(self, error: Exception) -> str:
-        return "; ".join(msg for m in self.loaded for msg in m.messages[-3:]) or str(error)
-
-    def get(self, names: list[str]) -> list[float]:
-        return self.slave.getReal([self.model.vr(n) for n in names])
-
-    def output(self, name: str) -> float:
-        return self.slave.getReal([self.vr[name]])[0]
-
-    def derivative(self, name: str) -> float:
-        return self.slave.getRealOutputDerivatives([self.vr[name]], [1])[0]
-
-    def set_input(self, name: str, value: float, slope: float):
-        self.slave.setReal([self.vr[name]], [value])
-        if slope != 0.0:
-            self.slave.setRealInputDerivatives([self.vr[name]], [1], [slope])
-
-    def do_step(self, t: float, h: float):
-        try:
-            self.slave.doStep(t, h)
-        except Exception as e:  # fmpy raises on a non-OK status: name the storey and say why
-            raise RuntimeError(f"storey {self.index}: fmi2DoStep({t:.6g}, {h:.6g}) failed: "
-                               f"{self.said(e)}") from None
-
-    def t_switch(self) -> float:
-        return self.slave.getReal([self.model.vr("tSwitch")])[0]
-
-
 # ---------------------------------------------------------------- masters
 
+PEAKS = ["peakUp", "peakApAbs", "Einput", "Ekinetic", "Estrain", "Eviscous", "Efriction"]
+EXTRAPOLATION_OF = {"hold": "constant", "history": "linear", "derivative": "derivative"}
+
+
 class Building:
-    """`n` loaded FMU instances, reused from run to run (fmi2Reset between)."""
+    """`n` loaded FMU instances (sll.cosim.FMUPartner, named storey1..storeyn),
+    reused from run to run (fmi2Reset between); `couple` runs them with the
+    masters of sll.cosim (one rule, one place: docs/stack-on-a-floor.md)."""
 
     def __init__(self, n: int, fmu: str | Path | None = None):
-        self.models = [Model(fmu) for _ in range(n)]
+        from sll.cosim import FMUPartner
+
+        path = Path(fmu) if fmu else fmu_path()
+        self.models = [FMUPartner(f"storey{i + 1}", path) for i in range(n)]
         self.defaults = fmu_defaults(self.models[0])
         self.tmp = tempfile.TemporaryDirectory(prefix="sll_coupling_")
 
@@ -265,17 +220,20 @@ class Building:
     def couple(self, storeys: list[dict], record, H: float, stop: float | None = None,
                master: str = "jacobi", extrapolation: str = "derivative",
                event_aware: bool = False, outputs: tuple[str, ...] = ("up",),
-               consistent: bool = True) -> dict:
+               consistent: bool = True, shear_sign: float = 1.0) -> dict:
         """Runs the coupled building over `record` ((t, ag in m/s2) or a record
         file) with macro step H up to `stop` (default: the record's end; the
         last step is shorter when H does not divide it). Returns time (every
         communication point, switch landings included), on_grid (which are
-        not landings), each of
-        `outputs` as an array per storey (run["up"][i]), the FMUs' peaks
-        (peakUp, peakSlip[j]) per storey, and the cost: fmu_steps (fmi2DoStep
-        calls over all storeys), rollbacks, seconds. `consistent=False`
-        exchanges as a plain importer does (fmucontainer, for one): every
-        output read right after the step, before any input is set."""
+        not landings), each of `outputs` as an array per storey
+        (run["up"][i]), the FMUs' peaks (peakUp, peakSlip[j]) per storey, and
+        the cost: fmu_steps (fmi2DoStep calls over all storeys), rollbacks,
+        seconds. `consistent=False` exchanges as a plain importer does
+        (fmucontainer, for one): every output read right after the step,
+        before any input is set. `shear_sign` is the gain of the link
+        Fext <- baseShear (+1 is the physics; -1 only to show it diverges)."""
+        from sll.cosim import CoSimulation, ConfigurationError
+
         if master not in MASTERS:
             raise ValueError(f"master = {master!r}: it must be one of {MASTERS}")
         if extrapolation not in EXTRAPOLATIONS:
@@ -287,139 +245,52 @@ class Building:
         stop = float(t_rec[-1] if stop is None else stop)
         if not (math.isfinite(H) and 0 < H <= stop):
             raise ValueError(f"H = {H}: it must be > 0 and at most the stop time {stop}")
-        n_steps = math.ceil(stop / H - 1e-9)  # the last step ends at stop
         csv = write_record_csv(t_rec, a_rec, Path(self.tmp.name) / "ground.csv")
-        units = [Storey(i + 1, self.models[i], p, str(csv) if i == 0 else "", self.models)
-                 for i, p in enumerate(storeys)]
-        if event_aware and not units[0].has_tswitch:
+        units = self.models[:len(storeys)]
+        if event_aware and "tSwitch" not in units[0].vars:
             raise ValueError("event_aware needs the FMU's tSwitch output (issue 12, item 3)")
-        for u in units:
-            u.start(stop)
-        run = _Run(units, master, extrapolation, event_aware, outputs, consistent)
-        started = time.perf_counter()
-        run.go(H, n_steps, stop)
-        result = run.result()
-        result["seconds"] = time.perf_counter() - started
-        for u in units:
-            u.slave.terminate()
+        for i, (u, p) in enumerate(zip(units, storeys)):
+            u.parameters = {"recordFile": str(csv) if i == 0 else "", **p}
+        links = []
+        for i in range(1, len(units)):  # storey i+1 stands on floor i
+            links.append((f"storey{i}.apAbs", f"storey{i + 1}.ag", 1.0, "m/s2"))
+            links.append((f"storey{i + 1}.baseShear", f"storey{i}.Fext", shear_sign, "N"))
+        sim = CoSimulation(units, links)
+        for m in self.models:
+            m.messages.clear()
+        try:
+            run = sim.run(stop, H, master=master, extrapolation=EXTRAPOLATION_OF[extrapolation],
+                          consistent=consistent, event_aware=event_aware,
+                          record=[f"{u.name}.{o}" for u in units for o in outputs])
+        except ConfigurationError as e:  # a parameter the FMU refused: name the storey, quote the FMU
+            raise ValueError(f"{self._storey(e)}: {self._said(e)}") from None
+        except RuntimeError as e:
+            raise RuntimeError(f"{self._storey(e)}: {self._said(e)}") from None
+        result = {"time": run["time"], "on_grid": run["on_grid"], "rollbacks": run["rollbacks"],
+                  "fmu_steps": sum(run["steps"].values()), "seconds": run["seconds"]}
+        for o in outputs:
+            result[o] = np.array([run[f"{u.name}.{o}"] for u in units])
+        result["peaks"] = [self._peaks(u) for u in units]
         return result
 
+    @staticmethod
+    def _storey(error: Exception) -> str:
+        name = str(error).split(":", 1)[0]
+        return f"storey {name[len('storey'):]}" if name.startswith("storey") else "building"
 
-class _Run:
-    """One coupled run: the storeys, the last exchanged values, what is recorded."""
+    def _said(self, error: Exception) -> str:
+        # fmpy's logger proxy is process-wide: a message may land in the list
+        # of whichever instance registered last, so look in all of them.
+        said = "; ".join(msg for m in self.models for msg in m.messages[-3:])
+        text = str(error).split(":", 1)[-1].strip()
+        return f"{text} ({said})" if said and said not in text else text
 
-    def __init__(self, units, master, extrapolation, event_aware, outputs, consistent):
-        self.units, self.master, self.extrapolation = units, master, extrapolation
-        self.consistent = consistent
-        self.event_aware, self.outputs = event_aware, outputs
-        self.n = len(units)
-        self.previous = None  # (t, shears, accels) of the last communication point
-        self.times, self.on_grid, self.rows = [], [], []
-        self.fmu_steps = self.rollbacks = 0
-
-    def sample(self, t: float, on_grid: bool):
-        self.times.append(t)
-        self.on_grid.append(on_grid)
-        self.rows.append([u.get(list(self.outputs)) for u in self.units])
-
-    def exchange(self, t: float):
-        """Sets consistent input values at t (baseShear -> Fext first: apAbs
-        depends on Fext) and their slopes over the coming step."""
-        u = self.units
-        shears = [x.output("baseShear") for x in u]
-        if not self.consistent:
-            accels = [x.output("apAbs") for x in u]
-        for i in range(self.n - 1):
-            u[i].slave.setReal([u[i].vr["Fext"]], [shears[i + 1]])
-        if self.consistent:
-            accels = [x.output("apAbs") for x in u]
-        for i in range(1, self.n):
-            u[i].slave.setReal([u[i].vr["ag"]], [accels[i - 1]])
-        d_shear, d_accel = [0.0] * self.n, [0.0] * self.n
-        if self.extrapolation == "history" and self.previous is not None:
-            t0, s0, a0 = self.previous
-            d_shear = [(s - p) / (t - t0) for s, p in zip(shears, s0)]
-            d_accel = [(a - p) / (t - t0) for a, p in zip(accels, a0)]
-        elif self.extrapolation == "derivative":
-            # d baseShear/dt needs ag and Fext; d apAbs/dt needs dFext/dt too.
-            d_shear = [x.derivative("baseShear") for x in u]
-            for i in range(self.n - 1):
-                u[i].set_input("Fext", shears[i + 1], d_shear[i + 1])
-            d_accel = [x.derivative("apAbs") for x in u]
-        self.previous = (t, shears, accels)
-        return shears, accels, d_shear, d_accel
-
-    def step(self, t: float, h: float, values, landing: bool = False):
-        """One macro step of every storey from t to t + h (inputs set at t).
-        A landing on a switch steps every storey from the values at t: a
-        Gauss-Seidel chord would reach across the switch's jump."""
-        shears, accels, d_shear, d_accel = values
-        u = self.units
-        for i in range(self.n - 1):
-            u[i].set_input("Fext", shears[i + 1], d_shear[i + 1])
-        if self.master == "jacobi" or landing:
-            for i in range(1, self.n):
-                u[i].set_input("ag", accels[i - 1], d_accel[i - 1])
-            for x in u:
-                x.do_step(t, h)
-        else:
-            u[0].do_step(t, h)
-            for i in range(1, self.n):
-                # The FMU evaluates apAbs with the Fext value last set, not the
-                # one extrapolated to t + h: set that first.
-                u[i - 1].slave.setReal([u[i - 1].vr["Fext"]], [shears[i] + d_shear[i] * h])
-                newest = u[i - 1].output("apAbs")
-                if self.extrapolation == "hold":
-                    u[i].set_input("ag", newest, 0.0)
-                else:
-                    u[i].set_input("ag", accels[i - 1], (newest - accels[i - 1]) / h)
-                u[i].do_step(t, h)
-        self.fmu_steps += self.n
-
-    def go(self, H: float, n_steps: int, stop: float):
-        t = 0.0
-        self.sample(t, True)
-        k = 0  # the grid point reached
-        while k < n_steps:
-            end = min((k + 1) * H, stop)
-            h = end - t
-            values = self.exchange(t)
-            if not self.event_aware:
-                self.step(t, h, values)
-                t, k = end, k + 1
-                self.sample(t, True)
-                continue
-            saved = [x.slave.getFMUstate() for x in self.units]
-            self.step(t, h, values)
-            first = min(x.t_switch() for x in self.units)
-            if t + SWITCH_SLACK * H < first < end - SWITCH_SLACK * H:
-                # A switch inside: land just past it, with the same inputs from
-                # t, so that it happens under the inputs that predicted it (with
-                # the next step's inputs a grazing stick limit may be reached a
-                # little later, again and again).
-                for x, s in zip(self.units, saved):
-                    x.slave.setFMUstate(s)
-                self.rollbacks += 1
-                landing = first + LANDING * H
-                self.step(t, landing - t, values, landing=True)
-                t = landing
-                self.sample(t, False)
-                # A slope through the switch means nothing: start the history afresh.
-                self.previous = None
-            else:
-                t, k = end, k + 1
-                self.sample(t, True)
-            for x, s in zip(self.units, saved):
-                x.slave.freeFMUstate(s)
-
-    def result(self) -> dict:
-        rows = np.array(self.rows)  # time, storey, output
-        out = {"time": np.array(self.times), "on_grid": np.array(self.on_grid),
-               "fmu_steps": self.fmu_steps, "rollbacks": self.rollbacks, "peaks": []}
-        for j, name in enumerate(self.outputs):
-            out[name] = rows[:, :, j].T
-        for x in self.units:
-            out["peaks"].append(x.model.peaks(x.n_blocks))
+    @staticmethod
+    def _peaks(u) -> dict:
+        n_blocks = int(u.get("nBlocks"))
+        names = PEAKS + [f"peakSlip[{j}]" for j in range(1, n_blocks + 1)]
+        out = {n: u.get(n) for n in names}
+        out.update({n: int(u.get(n)) for n in ("nEvents", "nAmbiguous")})
         return out
 
 

@@ -15,7 +15,6 @@ runs; each run covers the whole record in one fmi2DoStep.
 from __future__ import annotations
 
 import math
-import sys
 
 MP = 1000.0  # kg; DRR does not depend on it
 ZETA = 0.05
@@ -59,15 +58,12 @@ def run_task(task: dict) -> list[dict]:
     """All configurations of the study grid for one (zone, record, Tp).
 
     task: zone, record (path), Tp, alpha (values for alpha1 and alpha2), mu1, mu2
-    (lists), fmu (path or None), scripts (this folder, for workers that do not
-    have it on their path), optional scale (factor on the record: the intensity
+    (lists), fmu (path or None), scripts (this folder; unused: workers import
+    the installed sll package, pyproject.toml), optional scale (factor on the record: the intensity
     level, study.py --level / --scale). Rows: zone, record, Tp, alpha1, alpha2, mu1, mu2,
     configuration and peaks; single and rigid rows carry alpha1 = alpha1 + alpha2
     of the stacks they stand for, alpha2 = 0, and blank frictions they do not use.
     Every run of the task goes to the library in one call (`Model.run_batch`)."""
-    scripts = task.get("scripts")
-    if scripts and scripts not in sys.path:
-        sys.path.insert(0, scripts)  # a Dask worker: find the sll package
     zone, record, tp, fmu = task["zone"], task["record"], task["Tp"], task.get("fmu")
     name = record.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     key = {"zone": zone, "record": name, "Tp": tp}

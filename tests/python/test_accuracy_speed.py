@@ -8,14 +8,12 @@ from __future__ import annotations
 
 import csv
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
 import accuracy_speed  # noqa: E402
 import sll  # noqa: E402
 from sll import opensees_block  # noqa: E402

@@ -6,14 +6,12 @@ tSwitch. The physics behind each is tested in detail in tests/coupling_ports.rs.
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
 import sll  # noqa: E402
 
 

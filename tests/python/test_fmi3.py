@@ -9,7 +9,6 @@ FMU's outputs on the communication grid."""
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +17,6 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
 import sll  # noqa: E402
 
 FMI3 = ROOT / "target" / "fmu" / "fmi3" / "StackedLiveLoad.fmu"

@@ -14,7 +14,6 @@ import pytest
 from fmpy import simulate_fmu
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
 import sll  # noqa: E402
 
 RECORDS = ROOT.parent / "shared" / "ground_motions"

@@ -18,7 +18,6 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
 import sll  # noqa: E402
 
 RECORDS = ROOT.parent / "shared" / "ground_motions"

@@ -17,7 +17,6 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 CHILD_PRELUDE = f"""
 import json, math, os, sys
-sys.path.insert(0, {str(ROOT / "scripts")!r})
 import numpy as np
 from sll import Model
 out = {{}}
@@ -29,6 +28,8 @@ def attempt(f):
     except Exception:
         return "error"
 """
+# The child finds the sll package where pytest does (pyproject.toml: pythonpath).
+CHILD_ENV = {**os.environ, "PYTHONPATH": str(ROOT / "scripts")}
 
 
 def limit_memory():
@@ -39,7 +40,7 @@ def in_child(body: str, timeout: float = 60.0) -> dict:
     """Runs `body` after the prelude in a fresh interpreter; returns its `out`."""
     code = CHILD_PRELUDE + body + "\nprint('RESULT' + json.dumps(out))\n"
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=timeout, preexec_fn=limit_memory, env=os.environ.copy())
+                         timeout=timeout, preexec_fn=limit_memory, env=CHILD_ENV)
     assert run.returncode == 0, f"child ended with {run.returncode}:\n{run.stderr[-2000:]}"
     line = [x for x in run.stdout.splitlines() if x.startswith("RESULT")][-1]
     return json.loads(line[len("RESULT"):])
@@ -165,7 +166,7 @@ out["after"] = attempt(lambda: s.doStep(0.0, 0.5))
 print("RESULT" + json.dumps(out))
 """
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
-                         preexec_fn=limit_memory, env=os.environ.copy(), cwd=tmp_path)
+                         preexec_fn=limit_memory, env=CHILD_ENV, cwd=tmp_path)
     assert run.returncode == 0, run.stderr[-2000:]
     assert run.stderr == "", run.stderr[-2000:]
     out = json.loads([x for x in run.stdout.splitlines() if x.startswith("RESULT")][-1][6:])
@@ -181,7 +182,6 @@ print("RESULT" + json.dumps(out))
 
 @pytest.fixture(scope="module")
 def fmu():
-    sys.path.insert(0, str(ROOT / "scripts"))
     import sll
 
     return sll.fmu_path()

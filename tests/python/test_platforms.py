@@ -15,14 +15,12 @@ import os
 import re
 import shutil
 import subprocess
-import sys
 import zipfile
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
 import sll  # noqa: E402
 
 HARNESS = ROOT / "tests" / "c" / "platform_harness.c"

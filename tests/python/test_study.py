@@ -18,7 +18,6 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
 import advise  # noqa: E402
 import sll  # noqa: E402
 import study  # noqa: E402
