@@ -81,14 +81,6 @@ pub fn exact_at_step_start(
             shown = ahead;
         }
     }
-    // On a prescribed support the step's first call makes the mode at its
-    // start the reference of the support's law (`mode::support_law`; the
-    // master computed the inputs with the outputs shown): an empty call
-    // shows it so, as the step will start.
-    if shown.system().prescribed() {
-        let t = shown.time();
-        shown.advance(t, exc)?;
-    }
     Ok(shown)
 }
 
