@@ -526,6 +526,8 @@ struct Walk<'a> {
     index: [usize; MAX_BODIES],
     /// Number of interfaces in `zero` from j up (entry n + 1: none).
     remaining: [i32; MAX_BODIES + 1],
+    /// Of those, the ones that were stuck before (`was_stuck`).
+    remaining_kept: [i32; MAX_BODIES + 1],
     /// The interfaces in `zero` with a contact to choose (bit j).
     zero_ifaces: u32,
 }
@@ -548,9 +550,12 @@ impl<'a> Walk<'a> {
                 k += 1;
             }
         }
-        let mut remaining = [0; MAX_BODIES + 1];
+        let (mut remaining, mut remaining_kept) = ([0; MAX_BODIES + 1], [0; MAX_BODIES + 1]);
         for j in (1..=sys.n).rev() {
-            remaining[j] = remaining[j + 1] + i32::from(index[j] != usize::MAX);
+            let in_zero = index[j] != usize::MAX;
+            remaining[j] = remaining[j + 1] + i32::from(in_zero);
+            let kept = in_zero && req.was_stuck & (1 << j) != 0;
+            remaining_kept[j] = remaining_kept[j + 1] + i32::from(kept);
         }
         let zero_ifaces = (1..=sys.n)
             .filter(|&j| index[j] != usize::MAX)
@@ -560,6 +565,7 @@ impl<'a> Walk<'a> {
             req,
             index,
             remaining,
+            remaining_kept,
             zero_ifaces,
         }
     }
@@ -577,29 +583,48 @@ impl<'a> Walk<'a> {
             bottom: 0,
             accel_below: 0.0,
         };
-        self.choose(1, open, &mut mode, (0, false), search);
+        self.choose(1, open, &mut mode, (0, 0, false), search);
+    }
+
+    /// Whether every completion of a branch at interface `j` (`stuck` and
+    /// `kept` so far below it, `broken`) ranks after the best found on the
+    /// rule's first three criteria: it has at most `remaining` more stuck
+    /// interfaces, at most `remaining_kept` more that were stuck before,
+    /// and `broken` can only be lost.
+    #[inline]
+    fn beaten(&self, j: usize, (stuck, kept, broken): (i32, i32, bool), search: &Search) -> bool {
+        match (search.bound, &search.best) {
+            (true, Some((best, _))) => {
+                let most = (
+                    broken,
+                    -(stuck + self.remaining[j]),
+                    -(kept + self.remaining_kept[j]),
+                );
+                most > (best.0, best.1, best.2)
+            }
+            _ => false,
+        }
     }
 
     /// Chooses the contact of interface `j` (kept where it is not in
     /// `zero`); a stuck one extends the open cluster, any other closes it.
-    /// `(stuck, broken)`: the interfaces of `zero` stuck below `j`, and
-    /// whether one of them is in `must_break`.
+    /// `(stuck, kept, broken)`: the interfaces of `zero` stuck below `j`,
+    /// those of them that were stuck before, and whether one of them is in
+    /// `must_break`.
     fn choose(
         &self,
         j: usize,
         open: Open,
         mode: &mut Mode,
-        (stuck, broken): (i32, bool),
+        (stuck, kept, broken): (i32, i32, bool),
         search: &mut Search,
     ) {
         if search.count >= search.limit {
             return;
         }
-        if let (true, Some((best, _))) = (search.bound, &search.best) {
-            // No completion has more stuck interfaces, or loses `broken`.
-            if (broken, -(stuck + self.remaining[j])) > (best.0, best.1) {
-                return;
-            }
+        // No completion beats the best on the first three criteria.
+        if self.beaten(j, (stuck, kept, broken), search) {
+            return;
         }
         let n = self.sys.n;
         if j > n {
@@ -624,9 +649,9 @@ impl<'a> Walk<'a> {
         } else {
             &[Contact::Stuck, Contact::SlipForward, Contact::SlipBackward]
         };
-        let kept = [self.req.mode.contact[j]];
+        let keep = [self.req.mode.contact[j]];
         let options = if options.is_empty() {
-            &kept[..]
+            &keep[..]
         } else {
             options
         };
@@ -635,8 +660,17 @@ impl<'a> Walk<'a> {
             mode.contact[j] = c;
             if c == Contact::Stuck {
                 let breaks = in_zero && self.req.must_break & (1 << j) != 0;
-                let counted = (stuck + i32::from(in_zero), broken || breaks);
+                let was = in_zero && self.req.was_stuck & (1 << j) != 0;
+                let counted = (
+                    stuck + i32::from(in_zero),
+                    kept + i32::from(was),
+                    broken || breaks,
+                );
                 self.choose(j + 1, open, mode, counted, search);
+            } else if self.beaten(j + 1, (stuck, kept, broken), search) {
+                // The bound of the next interface, before the cluster is
+                // closed: the branch is dropped as it would be there.
+                continue;
             } else if let Some(accel) = {
                 search.tries += 1;
                 self.close(open, j, mode)
@@ -645,7 +679,7 @@ impl<'a> Walk<'a> {
                     bottom: j,
                     accel_below: accel,
                 };
-                self.choose(j + 1, next, mode, (stuck, broken), search);
+                self.choose(j + 1, next, mode, (stuck, kept, broken), search);
             }
         }
         mode.contact[j] = self.req.mode.contact[j];
