@@ -414,6 +414,21 @@ fn cluster_law(
     (accel, worst)
 }
 
+/// The force of stuck interface `j` of `mode` (body j-1 on body j) under
+/// the structure load `load0`, as [`cluster_law`] and [`Dynamics::force`] have
+/// it: only its sign is used, to order the walk's options.
+fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
+    let bottom = (1..j).rev().find(|&i| !mode.is_stuck(i)).unwrap_or(0);
+    let end = (j + 1..=sys.n).find(|&i| !mode.is_stuck(i)).unwrap_or(sys.n + 1);
+    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0);
+    let f_top = if end <= sys.n {
+        -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
+    } else {
+        0.0
+    };
+    sys.mass_down[j][end] * accel + f_top
+}
+
 /// What the resolution is asked to decide.
 #[derive(Clone, Copy, Debug)]
 pub struct ResolveRequest {
@@ -528,6 +543,11 @@ struct Walk<'a> {
     remaining: [i32; MAX_BODIES + 1],
     /// Of those, the ones that were stuck before (`was_stuck`).
     remaining_kept: [i32; MAX_BODIES + 1],
+    /// The same two counts without the interfaces of `must_break` (a
+    /// branch that keeps none of those stuck can only gain these).
+    remaining_unbroken: [[i32; 2]; MAX_BODIES + 1],
+    /// The contacts tried at each interface of `zero`, in the order tried.
+    options: [[Contact; 3]; MAX_BODIES],
     /// The interfaces in `zero` with a contact to choose (bit j).
     zero_ifaces: u32,
 }
@@ -551,11 +571,52 @@ impl<'a> Walk<'a> {
             }
         }
         let (mut remaining, mut remaining_kept) = ([0; MAX_BODIES + 1], [0; MAX_BODIES + 1]);
+        let mut remaining_unbroken = [[0; 2]; MAX_BODIES + 1];
         for j in (1..=sys.n).rev() {
             let in_zero = index[j] != usize::MAX;
             remaining[j] = remaining[j + 1] + i32::from(in_zero);
             let kept = in_zero && req.was_stuck & (1 << j) != 0;
             remaining_kept[j] = remaining_kept[j + 1] + i32::from(kept);
+            let unbroken = req.must_break & (1 << j) == 0;
+            let [u, k] = remaining_unbroken[j + 1];
+            remaining_unbroken[j] = [
+                u + i32::from(in_zero && unbroken),
+                k + i32::from(kept && unbroken),
+            ];
+        }
+        // The order changes only how soon the best is found (then the
+        // bound drops most branches), never which it is (the key decides).
+        // A stick that must break is tried slipping first, the way its
+        // force drives it first; a slip that has just stopped, stuck first,
+        // then the other way.
+        // The force is that with every interface of `zero` stuck: a slip
+        // that has just stopped is tried slipping first where it exceeds
+        // the static limit there.
+        use Contact::{SlipBackward as Back, SlipForward as Fwd, Stuck};
+        let mut options = [[Stuck, Fwd, Back]; MAX_BODIES];
+        let mut all_stuck = req.mode;
+        for j in 1..=sys.n {
+            if index[j] != usize::MAX {
+                all_stuck.contact[j] = Stuck;
+            }
+        }
+        for j in 1..=sys.n {
+            if index[j] == usize::MAX {
+                continue;
+            }
+            let breaks = req.must_break & (1 << j) != 0;
+            let stopped = !breaks && req.was_stuck & (1 << j) == 0;
+            if !(breaks || stopped) {
+                continue;
+            }
+            let mode = if breaks { &req.mode } else { &all_stuck };
+            let force = stuck_force(sys, mode, req.load0, j);
+            let slips = breaks || force.abs() > sys.mus[j] * sys.normal[j];
+            options[j] = match (slips, force > 0.0) {
+                (true, true) => [Back, Fwd, Stuck],
+                (true, false) => [Fwd, Back, Stuck],
+                (false, _) => [Stuck, Fwd, Back],
+            };
         }
         let zero_ifaces = (1..=sys.n)
             .filter(|&j| index[j] != usize::MAX)
@@ -566,6 +627,8 @@ impl<'a> Walk<'a> {
             index,
             remaining,
             remaining_kept,
+            remaining_unbroken,
+            options,
             zero_ifaces,
         }
     }
@@ -595,11 +658,14 @@ impl<'a> Walk<'a> {
     fn beaten(&self, j: usize, (stuck, kept, broken): (i32, i32, bool), search: &Search) -> bool {
         match (search.bound, &search.best) {
             (true, Some((best, _))) => {
-                let most = (
-                    broken,
-                    -(stuck + self.remaining[j]),
-                    -(kept + self.remaining_kept[j]),
-                );
+                // A best that keeps no stick of `must_break`: a branch that
+                // keeps none either can gain only the other interfaces.
+                let [more, more_kept] = if !broken && !best.0 {
+                    self.remaining_unbroken[j]
+                } else {
+                    [self.remaining[j], self.remaining_kept[j]]
+                };
+                let most = (broken, -(stuck + more), -(kept + more_kept));
                 most > (best.0, best.1, best.2)
             }
             _ => false,
@@ -638,24 +704,13 @@ impl<'a> Walk<'a> {
             }
             return;
         }
-        // A stick that must break is tried slipping first: the best
-        // assignment usually lets it go, and once found the bound drops
-        // every branch that keeps it stuck. The order changes only how soon
-        // the best is found, never which it is (the key decides).
-        let options: &[Contact] = if self.index[j] == usize::MAX {
-            &[]
-        } else if self.req.must_break & (1 << j) != 0 {
-            &[Contact::SlipForward, Contact::SlipBackward, Contact::Stuck]
-        } else {
-            &[Contact::Stuck, Contact::SlipForward, Contact::SlipBackward]
-        };
-        let keep = [self.req.mode.contact[j]];
-        let options = if options.is_empty() {
-            &keep[..]
-        } else {
-            options
-        };
         let in_zero = self.index[j] != usize::MAX;
+        let keep = [self.req.mode.contact[j]];
+        let options = if in_zero {
+            &self.options[j][..]
+        } else {
+            &keep[..]
+        };
         for &c in options {
             mode.contact[j] = c;
             if c == Contact::Stuck {
