@@ -477,6 +477,9 @@ pub struct Resolved {
 /// slip only on the two clusters it separates. Where no assignment is
 /// consistent, the enumeration of all 3^k picks the least violating one.
 pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
+    if let Some(res) = resolve_most_stuck(sys, req) {
+        return res;
+    }
     let walk = Walk::new(sys, req);
     let mut search = Search {
         best: None,
@@ -512,6 +515,60 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
         ambiguous,
         tries: search.tries,
     }
+}
+
+/// Most switches, decided without the walk where friction is equal
+/// (mus = muk) at every interface of `zero`: every interface of `zero`
+/// stuck but those of `must_break`, which slip in every combination of
+/// directions in the rule's order (at most two such interfaces). The first
+/// of these that is consistent is the walk's: no other assignment keeps as
+/// many interfaces stuck without one of `must_break` (rule 1 and 2), the
+/// stuck set, hence the kept count (rule 3) and the stuck bits, is the same
+/// for all of them, and they come in the order of their slip directions'
+/// bits (the rest of rule 4). `None`: none is consistent, or the case is
+/// not covered (the walk decides).
+fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
+    let zero = req.zero & !free_mask(sys);
+    let mut equal = true;
+    for j in 1..=sys.n {
+        if zero & (1 << j) != 0 {
+            equal &= sys.mus[j] == sys.muk[j];
+        }
+    }
+    let breaking = zero & req.must_break;
+    if !equal || breaking.count_ones() > 2 {
+        return None;
+    }
+    let mut mode = req.mode;
+    let mut slips = [0usize; 2];
+    let mut n_slips = 0;
+    for j in 1..=sys.n {
+        if breaking & (1 << j) != 0 {
+            slips[n_slips] = j;
+            n_slips += 1;
+        } else if zero & (1 << j) != 0 {
+            mode.contact[j] = Contact::Stuck;
+        }
+    }
+    // Slip directions as the rule's bits (backward = 1, from the bottom).
+    for code in 0u32..1 << n_slips {
+        for (s, &j) in slips[..n_slips].iter().enumerate() {
+            mode.contact[j] = if code & (1 << s) != 0 {
+                Contact::SlipBackward
+            } else {
+                Contact::SlipForward
+            };
+        }
+        if violation(sys, &mode, zero, req.load0) <= CONSISTENCY_TOL {
+            return Some(Resolved {
+                mode,
+                consistent: true,
+                ambiguous: false,
+                tries: code + 1,
+            });
+        }
+    }
+    None
 }
 
 /// The state of a walk: the best consistent assignment so far and how many
