@@ -208,7 +208,7 @@ pub(super) struct DynamicsCache {
 }
 
 /// How many modes' dynamics are kept (then the oldest is replaced).
-const DYNAMICS_CACHE_SIZE: usize = 32;
+const DYNAMICS_CACHE_SIZE: usize = 64;
 
 impl DynamicsCache {
     /// The mode as a number: two bits per interface, and the block count.

@@ -357,10 +357,17 @@ impl Simulator {
         let mut ifaces = d.changing_guards;
         let mut earliest: Option<(f64, usize)> = None;
         let mut at_once = 0u32;
+        // Every stick of the structure's cluster at once: the acceleration
+        // kept inside the band inside all of them (then each guard's own
+        // test, on a wider band, returns no polynomial either).
+        let sticks_hold = d.stick_band.is_some_and(|(lo, hi)| {
+            let (a0, bound) = (flow.accel_start, flow.accel_spread_bound);
+            a0 - bound > lo && a0 + bound < hi
+        });
         for g in &d.guards[..d.n_guards] {
             let j = ifaces.trailing_zeros() as usize;
             ifaces &= ifaces - 1;
-            if muted & (1 << j) != 0 {
+            if muted & (1 << j) != 0 || (sticks_hold && matches!(g, Guard::Stuck { .. })) {
                 continue;
             }
             for poly in flow.guard_polys(self, g).iter().flatten() {
