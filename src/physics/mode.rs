@@ -124,7 +124,7 @@ pub struct Moving {
 
 /// The reduced dynamics of one mode: clusters, their masses and the
 /// constant forces the slipping interfaces put on them.
-#[derive(Clone, Debug)]
+#[derive(Clone, Copy, Debug)]
 pub struct Dynamics {
     /// Number of clusters (degrees of freedom).
     pub n_clusters: usize,
