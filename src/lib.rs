@@ -23,4 +23,4 @@ pub mod physics;
 
 pub use ground::record::{GroundMotion, RecordError};
 pub use physics::engine::{Excitation, Outputs, SimError, Simulator, Stats};
-pub use physics::params::{Method, ParamError, Params, Settings, MAX_BLOCKS};
+pub use physics::params::{Method, ParamError, Params, Settings, Support, MAX_BLOCKS};

@@ -25,7 +25,9 @@
 use crate::limits::{SWITCH_WORK, TRY_WORK};
 use crate::physics::hermite;
 use crate::physics::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
-use crate::physics::params::{Method, ParamError, Params, Settings, MAX_BLOCKS, MAX_BODIES};
+use crate::physics::params::{
+    check_scalar, Method, ParamError, Params, Settings, MAX_BLOCKS, MAX_BODIES,
+};
 use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::physics::system::System;
 
@@ -47,6 +49,7 @@ pub use pieces::{
     ACCURATE_MAX_STEP, EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
     STABLE_H_OMEGA,
 };
+pub use proofs::PRESCRIBED_MAX_STEP;
 pub use report::{Outputs, SimError, Stats};
 use structure_rk4::{move_bodies, upper_cluster_step, Structure, StructureRk4};
 
@@ -106,6 +109,7 @@ impl Simulator {
             params: params.clone(),
             h_max: auto_step(settings, sys.omega_p),
             exact: settings.method == Method::EventLocated,
+            // (omega_p = 0 on a prescribed support: FINE_MAX_STEP.)
             h_fine: (FINE_H_OMEGA / sys.omega_p).min(FINE_MAX_STEP),
             maps: exact_map::MapCache::default(),
             dyn_cache: events::DynamicsCache::default(),
@@ -147,13 +151,17 @@ impl Simulator {
 
     /// Sets the displacement and velocity of every body (relative to the
     /// support, index 0 = structure) and resolves the mode. Peaks restart
-    /// from this state; energies are zeroed.
+    /// from this state; energies are zeroed. On a prescribed support body 0
+    /// is the support: `u[0]` and `v[0]` are taken as 0 whatever is given.
     pub fn set_state(&mut self, u: &[f64], v: &[f64]) {
         let n = self.sys.n;
         self.u = [0.0; MAX_BODIES];
         self.v = [0.0; MAX_BODIES];
         self.u[..=n].copy_from_slice(&u[..=n]);
         self.v[..=n].copy_from_slice(&v[..=n]);
+        if self.sys.prescribed() {
+            (self.u[0], self.v[0]) = (0.0, 0.0);
+        }
         self.e_input = 0.0;
         self.e_viscous = 0.0;
         self.e_friction = [0.0; MAX_BODIES];
@@ -178,6 +186,24 @@ impl Simulator {
             self.peak_slip[j] = (self.u[j] - self.u[j - 1]).abs();
         }
         self.peak_a0 = self.structure_accel().abs();
+    }
+
+    /// Sets the support's mobility `m_b = d(floor acceleration) /
+    /// d(floor force)` (1/kg; 1 / M_f for a floor of lumped mass M_f), used
+    /// by the mode resolutions of a prescribed support from now on (at
+    /// switches, at input jumps; between them the support follows `ag`
+    /// exactly). 0 (the default): a support that nothing the stack does
+    /// moves. Finite, from 0 to 1e9 (`supportMobility`); on a structure it
+    /// is kept but unused.
+    pub fn set_support_mobility(&mut self, mobility: f64) -> Result<(), ParamError> {
+        check_scalar("supportMobility", mobility)?;
+        self.sys.mobility = mobility;
+        Ok(())
+    }
+
+    /// The support's mobility ([`Simulator::set_support_mobility`]).
+    pub fn support_mobility(&self) -> f64 {
+        self.sys.mobility
     }
 
     /// Current time (s).
@@ -266,8 +292,12 @@ impl Simulator {
 
     /// Whether the current mode satisfies the contact law (within tolerance).
     pub fn mode_is_consistent(&self) -> bool {
-        mode::violation(&self.sys, &self.mode, self.zero_mask(), self.load0())
-            <= mode::CONSISTENCY_TOL
+        mode::violation(
+            &self.sys,
+            &self.mode,
+            self.zero_mask(),
+            self.resolve_load0(),
+        ) <= mode::CONSISTENCY_TOL
     }
 
     /// Advances to `t_end` under an excitation that is linear over
@@ -336,7 +366,20 @@ impl Simulator {
     /// external force (it can break a stick; `ag` cannot).
     fn begin_piece(&mut self, t_end: f64, exc: &Excitation) -> Result<Piece, SimError> {
         exc.check(self.t, t_end)?;
-        if pieces::is_jump(exc.fext, self.fext_now) {
+        let prescribed = self.sys.prescribed();
+        if prescribed && (exc.fext != 0.0 || exc.fext_rate != 0.0) {
+            let (name, value) = if exc.fext != 0.0 {
+                ("Fext", exc.fext)
+            } else {
+                ("der(Fext)", exc.fext_rate)
+            };
+            return Err(SimError::NoForceOnSupport { name, value });
+        }
+        // On a prescribed support a jump of `ag` moves the support's cluster
+        // at once, as a jump of `Fext` a structure's.
+        if pieces::is_jump(exc.fext, self.fext_now)
+            || (prescribed && pieces::is_jump(exc.ag, self.ag_now))
+        {
             // The guards that the jump violates fire as at any event.
             self.fire_violated(exc, self.t, self.all_interfaces(), 0);
         }
@@ -395,8 +438,22 @@ impl Simulator {
         hermite::raise_peak(&mut self.peak_a0, a0_start, jerk_start, a0_end, jerk_end, h);
     }
 
+    /// The structure cluster's load now ([`Dynamics::load0`]).
     fn load0(&self) -> f64 {
-        Dynamics::structure_load(&self.sys, self.u[0], self.v[0], self.fext_now)
+        Dynamics::load0(&self.sys, self.u[0], self.v[0], self.ag_now, self.fext_now)
+    }
+
+    /// The load a mode resolution takes now ([`ResolveRequest::load0`]): the
+    /// structure's load; on a prescribed support `ag - m_b F_old`, with
+    /// `F_old` the force the stack puts on it in the current mode.
+    fn resolve_load0(&self) -> f64 {
+        let load0 = self.load0();
+        if self.sys.prescribed() {
+            let floor_force = self.dynamics.floor_force(&self.mode, load0);
+            load0 - self.sys.mobility * floor_force
+        } else {
+            load0
+        }
     }
 
     fn structure_accel(&self) -> f64 {

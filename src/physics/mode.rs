@@ -10,6 +10,12 @@
 //! Everything here is written in *absolute* accelerations `A_i = u_i'' + ag`:
 //! the ground acceleration drops out of every force and of every relative
 //! acceleration, so stick/slip decisions never depend on `ag`.
+//!
+//! On a prescribed support (`Support::Prescribed`) body 0 is the support:
+//! its cluster's absolute acceleration is the input `ag` itself
+//! ([`Dynamics::accel0`], [`Dynamics::input_accel`]), and `ag` then enters
+//! the stick/slip decisions. When a mode is resolved there, the cluster's
+//! acceleration follows the support's mobility ([`cluster_law`]).
 
 use crate::physics::params::MAX_BODIES;
 use crate::physics::system::System;
@@ -145,8 +151,14 @@ pub struct Dynamics {
     /// `slip_load / mass` of each cluster: the whole absolute acceleration
     /// of clusters above the structure's, constant in the mode.
     pub accel_const: [f64; MAX_BODIES],
-    /// 1 / mass of the structure's cluster.
+    /// 1 / mass of the structure's cluster; 0 on a prescribed support (no
+    /// force moves it: it moves with `ag`).
     pub inv_mass0: f64,
+    /// `ag`'s share of the structure cluster's absolute acceleration: 0 on
+    /// a structure (forces move it), 1 on a prescribed support (it moves
+    /// with `ag`). With `inv_mass0`, the one rule of every integrator
+    /// ([`Dynamics::input_accel`]).
+    pub ag_gain: f64,
     /// Interfaces (bit j) whose guard can change sign within the mode:
     /// slipping ones, and stuck ones in the structure's cluster. A stick
     /// higher up carries a constant force; a free interface has no guard.
@@ -229,6 +241,7 @@ impl Dynamics {
             mass_above: [0.0; MAX_BODIES],
             accel_const: [0.0; MAX_BODIES],
             inv_mass0: 0.0,
+            ag_gain: 0.0,
             changing_guards: 0,
             guards: [Guard::Slip {
                 hi: 0,
@@ -259,10 +272,16 @@ impl Dynamics {
                 d.slip_load[d.cluster_of[j - 1]] -= f;
             }
         }
-        for c in 0..d.n_clusters {
+        for c in 1..d.n_clusters {
             d.accel_const[c] = d.slip_load[c] / d.mass[c];
         }
-        d.inv_mass0 = 1.0 / d.mass[0];
+        if sys.prescribed() {
+            // The support's cluster (possibly of no mass) moves with `ag`.
+            (d.inv_mass0, d.ag_gain) = (0.0, 1.0);
+        } else {
+            d.accel_const[0] = d.slip_load[0] / d.mass[0];
+            d.inv_mass0 = 1.0 / d.mass[0];
+        }
         for c in 0..d.n_clusters {
             let mut above = 0.0;
             for j in (d.bottom[c]..=d.top[c]).rev() {
@@ -279,6 +298,29 @@ impl Dynamics {
         fext - sys.k * u0 - sys.c * v0
     }
 
+    /// The structure cluster's load as [`Dynamics::accel0`] takes it (the
+    /// `load0` of every method here): on a structure the force of the
+    /// spring, the damper and `fext` (N); on a prescribed support the
+    /// support's absolute acceleration `ag` (m/s2).
+    #[inline]
+    pub fn load0(sys: &System, u0: f64, v0: f64, ag: f64, fext: f64) -> f64 {
+        if sys.prescribed() {
+            ag
+        } else {
+            Dynamics::structure_load(sys, u0, v0, fext)
+        }
+    }
+
+    /// The part of the structure cluster's absolute acceleration that the
+    /// inputs make: `fext / M0` on a structure, `ag` on a prescribed
+    /// support. Its acceleration is this plus `(slip load - k u0 - c v0) /
+    /// M0` (all zero on a prescribed support): the rule the integrators
+    /// use, written here once (their forcing relative to the support is
+    /// this minus `ag`, exactly 0 on a prescribed support).
+    #[inline(always)]
+    pub fn input_accel(&self, ag: f64, fext: f64) -> f64 {
+        fext * self.inv_mass0 + ag * self.ag_gain
+    }
     /// Absolute acceleration of cluster `c`; `load0` is the structure load
     /// (used only by cluster 0).
     #[inline]
@@ -290,10 +332,46 @@ impl Dynamics {
         }
     }
 
-    /// Absolute acceleration of the structure's cluster.
+    /// Absolute acceleration of the structure's cluster: `(slip load +
+    /// load0) / M0` on a structure, `load0` (= `ag`) on a prescribed
+    /// support ([`Dynamics::load0`]).
     #[inline]
     pub fn accel0(&self, load0: f64) -> f64 {
-        (self.slip_load[0] + load0) * self.inv_mass0
+        if self.ag_gain != 0.0 {
+            load0
+        } else {
+            (self.slip_load[0] + load0) * self.inv_mass0
+        }
+    }
+
+    /// The force the stack puts on body 0 (the structure or the support)
+    /// along +x: `-F_1` (0 without blocks).
+    pub fn floor_force(&self, mode: &Mode, load0: f64) -> f64 {
+        if mode.n == 0 {
+            0.0
+        } else {
+            -self.force(1, mode, load0)
+        }
+    }
+
+    /// Mass of the blocks stuck to body 0 (its cluster without it), kg.
+    pub fn attached_mass(&self, mode: &Mode) -> f64 {
+        if mode.n >= 1 && mode.is_stuck(1) {
+            self.mass_above[1]
+        } else {
+            0.0
+        }
+    }
+
+    /// `floor_force + attached_mass A0`: the force of the first slipping
+    /// interface above the attached blocks on them (`-F_{k+1}`, 0 if none),
+    /// or `floor_force` itself while interface 1 slips. Constant in a mode.
+    pub fn sliding_force(&self, mode: &Mode) -> f64 {
+        if mode.n == 0 {
+            0.0
+        } else {
+            0.0 - self.force_affine(1, mode).1
+        }
     }
 
     /// Friction force of interface j (force of body j-1 on body j).
@@ -375,6 +453,16 @@ fn free_mask(sys: &System) -> u32 {
 /// cluster, the resolver's walk as each cluster closes. The arithmetic is
 /// that of [`Dynamics::clusters`] and [`Dynamics::force`], operation for
 /// operation (the masses are `System`'s tables of the same sums).
+///
+/// On a prescribed support the cluster on it (blocks of mass `M'`, load `s'`
+/// from the interface above) moves at `(ag + m_b (s' - F_old)) / (1 + m_b
+/// M')`, with `m_b` the support's mobility ([`System::mobility`]) and
+/// `load0 = ag - m_b F_old` ([`ResolveRequest::load0`]; `F_old` the force the
+/// stack put on the support in the mode before): the acceleration of a
+/// floor of mass `1 / m_b` carrying the stack, pushed by the rest of its
+/// model with the force that gave it `ag` under `F_old`. With `m_b = 0` it
+/// is `ag` exactly. (docs/model-and-numerics.md, "A stack on a prescribed
+/// support".)
 #[inline]
 fn cluster_law(
     sys: &System,
@@ -395,7 +483,12 @@ fn cluster_law(
         load -= f_top;
     }
     let accel = if bottom == 0 {
-        (load + load0) * (1.0 / mass)
+        if sys.prescribed() {
+            let mb = sys.mobility;
+            (mb * load + load0) / (1.0 + mb * mass)
+        } else {
+            (load + load0) * (1.0 / mass)
+        }
     } else {
         load / mass
     };
@@ -440,7 +533,10 @@ pub struct ResolveRequest {
     pub must_break: u32,
     /// Interfaces that were stuck before this instant (preferred to stay so).
     pub was_stuck: u32,
-    /// Structure load (spring, damper, external force) at this instant.
+    /// Structure load (spring, damper, external force) at this instant; on a
+    /// prescribed support `ag - m_b F_old`, with `m_b` its mobility and
+    /// `F_old` the force the stack puts on it in the current mode (see
+    /// [`cluster_law`]; just `ag` when `m_b = 0`).
     pub load0: f64,
 }
 

@@ -7,6 +7,21 @@ pub const MAX_BLOCKS: usize = 8;
 /// Bodies: the structure (index 0) and up to `MAX_BLOCKS` blocks.
 pub const MAX_BODIES: usize = MAX_BLOCKS + 1;
 
+/// What block 1 rests on (see `shared/MODEL.md`, "A stack on a support
+/// whose motion is prescribed").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Support {
+    /// The SDOF structure (body 0: mass `mp`, period `Tp`, damping `zeta`)
+    /// on the ground, whose absolute acceleration is the input `ag`.
+    #[default]
+    Structure,
+    /// A support whose absolute acceleration is the input `ag` (the floor of
+    /// another model): body 0 is pinned to it (no spring, no damper, no mass
+    /// of its own); `Tp` and `zeta` are unused, `Fext` must be 0, and block
+    /// j's mass is `alpha[j] * mp`.
+    Prescribed,
+}
+
 /// Physical description of a scene, in the paper's terms (see `shared/MODEL.md`).
 ///
 /// Arrays are indexed by block / interface number minus one: `alpha[0]` is
@@ -29,6 +44,8 @@ pub struct Params {
     pub mus: [f64; MAX_BLOCKS],
     /// Kinetic friction coefficient of interface j.
     pub muk: [f64; MAX_BLOCKS],
+    /// What block 1 rests on.
+    pub support: Support,
 }
 
 impl Default for Params {
@@ -48,6 +65,7 @@ impl Default for Params {
             alpha,
             mus: mu,
             muk: mu,
+            support: Support::Structure,
         }
     }
 }
@@ -95,7 +113,7 @@ fn check(field: &str, value: f64, ok: bool, allowed: &'static str) -> Result<(),
 /// derived quantity (stiffness, normal forces, energies) far from overflow.
 /// `(name, low, high, in words)`; both ends are included unless the words say
 /// otherwise. See `docs/robustness.md`.
-pub const RANGES: [(&str, f64, f64, &str); 13] = [
+pub const RANGES: [(&str, f64, f64, &str); 14] = [
     ("mp", 1e-3, 1e12, "finite, from 1e-3 to 1e12 (kg)"),
     ("Tp", 1e-3, 1e3, "finite, from 1e-3 to 1e3 (s)"),
     ("zeta", 0.0, 1.0, "finite, >= 0 and < 1"),
@@ -111,6 +129,9 @@ pub const RANGES: [(&str, f64, f64, &str); 13] = [
     ("Fext", -1e18, 1e18, "finite, from -1e18 to 1e18 (N)"),
     ("der(ag)", -1e9, 1e9, "finite, from -1e9 to 1e9 (m/s3)"),
     ("der(Fext)", -1e21, 1e21, "finite, from -1e21 to 1e21 (N/s)"),
+    // d(floor acceleration) / d(floor force) of a prescribed support's
+    // partner (1 / its floor mass): 0 is a support that nothing moves.
+    ("supportMobility", 0.0, 1e9, "finite, from 0 to 1e9 (1/kg)"),
 ];
 
 /// Smallest positive `maxStep` (s); 0 selects the automatic step.
@@ -142,6 +163,15 @@ impl Params {
                 field: "nBlocks".into(),
                 value: self.n_blocks as f64,
                 allowed: "an integer from 0 to 8".into(),
+            });
+        }
+        if self.support == Support::Prescribed && self.n_blocks == 0 {
+            return Err(ParamError {
+                field: "nBlocks".into(),
+                value: 0.0,
+                allowed: "an integer from 1 to 8 on a prescribed support (a stack of no block \
+                          has nothing to compute)"
+                    .into(),
             });
         }
         for (name, value) in [

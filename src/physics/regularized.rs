@@ -10,7 +10,7 @@
 
 use crate::physics::engine::{Excitation, Outputs, SimError};
 use crate::physics::hermite;
-use crate::physics::params::{ParamError, Params, MAX_BODIES};
+use crate::physics::params::{ParamError, Params, Support, MAX_BODIES};
 use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::physics::system::System;
 
@@ -58,6 +58,21 @@ pub fn stable_step(sys: &System, eps: f64) -> (f64, usize) {
     (STABLE_H_LAMBDA / lambda, stiffest.1)
 }
 
+/// The regularized baseline integrates a structure only: a prescribed
+/// support is refused (use the exact default).
+pub fn refuse_prescribed(params: &Params) -> Result<(), ParamError> {
+    if params.support == Support::Prescribed {
+        return Err(ParamError {
+            field: "support".into(),
+            value: 1.0,
+            allowed: "the structure (0) with the regularized baseline (solver 3): a prescribed \
+                      support needs the exact default (solver 1)"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
 /// A scene with regularized friction.
 #[derive(Clone, Debug)]
 pub struct RegularizedSimulator {
@@ -83,6 +98,7 @@ impl RegularizedSimulator {
     /// smaller of its step and [`stable_step`], as the FMU's solver 3 does.
     pub fn new(params: &Params, eps: f64, step: f64) -> Result<RegularizedSimulator, ParamError> {
         let sys = System::new(params)?;
+        refuse_prescribed(params)?;
         for (field, value) in [("frictionEps", eps), ("step", step)] {
             if !(value > 0.0 && value.is_finite()) {
                 return Err(ParamError {
@@ -342,6 +358,11 @@ impl RegularizedSimulator {
             o.ab_abs[b] = a[j];
             o.force[b] = self.friction(j, y[m + j] - y[m + j - 1]);
             o.peak_slip[b] = self.peak_slip[j];
+        }
+        // No block sticks: the floor force is the friction of interface 1.
+        if s.n >= 1 {
+            o.floor_force = -o.force[0];
+            o.sliding_force = o.floor_force;
         }
         o
     }

@@ -96,7 +96,7 @@ impl<'a> ByteReader<'a> {
     }
 }
 
-use crate::physics::params::Params;
+use crate::physics::params::{Params, Support};
 
 impl Params {
     /// Writes every field in a fixed order (part of saved states).
@@ -106,6 +106,10 @@ impl Params {
         w.f64s(&self.alpha);
         w.f64s(&self.mus);
         w.f64s(&self.muk);
+        w.u8(match self.support {
+            Support::Structure => 0,
+            Support::Prescribed => 1,
+        });
     }
 
     /// Reads what [`Params::write`] wrote (not validated here).
@@ -120,6 +124,11 @@ impl Params {
         r.f64s(&mut p.alpha)?;
         r.f64s(&mut p.mus)?;
         r.f64s(&mut p.muk)?;
+        p.support = match r.u8()? {
+            0 => Support::Structure,
+            1 => Support::Prescribed,
+            x => return Err(format!("unknown support {x} in the saved state")),
+        };
         Ok(p)
     }
 }

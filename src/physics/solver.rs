@@ -133,6 +133,7 @@ impl Solver {
         }
         check_scalar("frictionEps", friction_eps)?;
         let sys = System::new(params)?;
+        regularized::refuse_prescribed(params)?;
         let wanted = if max_step > 0.0 {
             max_step
         } else {

@@ -1,12 +1,18 @@
 //! Physical constants derived from validated [`Params`]: masses, stiffness,
 //! damping and the normal force of every interface.
 
-use crate::physics::params::{ParamError, Params, MAX_BODIES};
+use crate::physics::params::{ParamError, Params, Support, MAX_BODIES};
 use std::f64::consts::PI;
 
 /// Body 0 is the structure; bodies 1..=n are blocks. Interface arrays are
 /// indexed by interface number j = 1..=n (index 0 unused): interface j lies
 /// between body j-1 and body j.
+///
+/// On a prescribed support ([`Support::Prescribed`]) body 0 is the support,
+/// pinned to the input `ag`: `k = c = 0`, `mass[0] = 0` (the support's own
+/// mass is its model's business; [`System::mobility`] stands for it when a
+/// mode is resolved) and `omega_p = 0` (no spring: the substeps do not
+/// follow from it, see `Simulator::map_step`).
 #[derive(Clone, Debug)]
 pub struct System {
     /// Number of blocks.
@@ -25,8 +31,16 @@ pub struct System {
     pub mus: [f64; MAX_BODIES],
     /// Kinetic friction coefficient of interface j.
     pub muk: [f64; MAX_BODIES],
-    /// Circular frequency of the bare structure, sqrt(k / mp).
+    /// Circular frequency of the bare structure, sqrt(k / mp); 0 on a
+    /// prescribed support.
     pub omega_p: f64,
+    /// What block 1 rests on.
+    pub support: Support,
+    /// The support's mobility `d(floor acceleration) / d(floor force)`
+    /// (1/kg), used only when a mode is resolved on a prescribed support
+    /// (`mode::cluster_law`); 0 unless `Simulator::set_support_mobility`
+    /// set it.
+    pub mobility: f64,
     /// `[a][e]`: mass of bodies a..e summed upwards from 0, in the order
     /// [`crate::physics::mode::Dynamics::clusters`] adds a cluster's mass.
     pub mass_up: [[f64; MAX_BODIES + 1]; MAX_BODIES],
@@ -40,12 +54,13 @@ impl System {
     pub fn new(p: &Params) -> Result<System, ParamError> {
         p.validate()?;
         let n = p.n_blocks;
-        let omega_p = 2.0 * PI / p.tp;
+        let prescribed = p.support == Support::Prescribed;
+        let omega_p = if prescribed { 0.0 } else { 2.0 * PI / p.tp };
         let k = p.mp * omega_p * omega_p;
         let mut mass = [0.0; MAX_BODIES];
         let mut mus = [0.0; MAX_BODIES];
         let mut muk = [0.0; MAX_BODIES];
-        mass[0] = p.mp;
+        mass[0] = if prescribed { 0.0 } else { p.mp };
         for j in 1..=n {
             mass[j] = p.alpha[j - 1] * p.mp;
             mus[j] = p.mus[j - 1];
@@ -79,18 +94,30 @@ impl System {
             n,
             mass,
             k,
-            c: 2.0 * p.zeta * (k * p.mp).sqrt(),
+            c: if prescribed {
+                0.0
+            } else {
+                2.0 * p.zeta * (k * p.mp).sqrt()
+            },
             g: p.g,
             normal,
             mus,
             muk,
             omega_p,
+            support: p.support,
+            mobility: 0.0,
         })
     }
 
     /// An interface with no static friction transmits no force and never sticks.
     pub fn is_free(&self, j: usize) -> bool {
         self.mus[j] == 0.0
+    }
+
+    /// Whether body 0 is a support whose acceleration is the input `ag`.
+    #[inline(always)]
+    pub fn prescribed(&self) -> bool {
+        self.support == Support::Prescribed
     }
 
     /// Mass of the structure and all blocks (kg).

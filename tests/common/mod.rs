@@ -8,6 +8,14 @@
 //! found by bisection on that exact solution (to ~1e-14 s). Only the choice
 //! of mode at an event is delegated to the engine's `mode::resolve`, which
 //! the property tests check against projected Gauss–Seidel separately.
+//!
+//! A prescribed support (`Support::Prescribed`) is body 0 pinned to the
+//! input: no spring, no damper, an infinite mass in the Delassus system
+//! (its row of `W` has no `1/m0`), its absolute acceleration `ag` itself
+//! (so the blocks' stick forces depend on `ag`: the generator gets an `ag`
+//! column), its velocity kept at 0 when velocities are joined, and `ag`
+//! jumps resolved as events (as `Fext` jumps are on a structure). Its input
+//! and friction work are integrated exactly (the motion is polynomial).
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, DVector};
@@ -86,6 +94,10 @@ pub struct ExactResult {
     pub event_times: Vec<f64>,
     /// u0 at every record sample.
     pub u0_history: Vec<f64>,
+    /// Prescribed support only (0 otherwise): the input work
+    /// `-∫ Σ m_j ag u_j' dt` and the friction work of each interface.
+    pub e_input: f64,
+    pub e_friction: Vec<f64>,
 }
 
 /// One linear piece of the inputs, ending at `t_end`; values at its start.
@@ -103,6 +115,9 @@ pub struct Exact {
     sys: System,
     m: usize,
     mass: Vec<f64>,
+    /// 1 / mass of each body (0 for a prescribed support).
+    inv_mass: Vec<f64>,
+    prescribed: bool,
     k: f64,
     c: f64,
     normal: Vec<f64>,
@@ -124,14 +139,39 @@ impl Exact {
                 }
             })
             .collect();
+        let prescribed = p.support == stacked_live_load::Support::Prescribed;
+        let inv_mass = (0..m)
+            .map(|i| {
+                if i == 0 && prescribed {
+                    0.0
+                } else {
+                    1.0 / mass[i]
+                }
+            })
+            .collect();
+        let (k, c) = if prescribed {
+            (0.0, 0.0)
+        } else {
+            (k, 2.0 * p.zeta * (k * p.mp).sqrt())
+        };
         Exact {
             sys: System::new(p).unwrap(),
             m,
             mass,
+            inv_mass,
+            prescribed,
             k,
-            c: 2.0 * p.zeta * (k * p.mp).sqrt(),
+            c,
             normal,
         }
+    }
+
+    /// The same reference with the support's mobility `m_b` for the mode
+    /// resolutions of a prescribed support (the engine's
+    /// `Simulator::set_support_mobility`).
+    pub fn with_mobility(mut self, mobility: f64) -> Exact {
+        self.sys.mobility = mobility;
+        self
     }
 
     /// Absolute accelerations of the bodies and interface forces (index j-1
@@ -148,6 +188,19 @@ impl Exact {
         v0: f64,
         fext: f64,
     ) -> (DVector<f64>, DVector<f64>) {
+        self.chain_full(mode, u0, v0, fext, 0.0)
+    }
+
+    /// As [`Exact::chain_with_force`] with the support's acceleration `ag`,
+    /// which moves body 0 of a prescribed support (and nothing else).
+    pub fn chain_full(
+        &self,
+        mode: &Mode,
+        u0: f64,
+        v0: f64,
+        fext: f64,
+        ag: f64,
+    ) -> (DVector<f64>, DVector<f64>) {
         let n = self.m - 1;
         let s0 = -self.k * u0 - self.c * v0 + fext;
         let mut f = DVector::zeros(n);
@@ -159,13 +212,14 @@ impl Exact {
         }
         if !stuck.is_empty() {
             // r = W f + b, relative accelerations of the interfaces.
+            let inv = &self.inv_mass;
             let w = |a: usize, b: usize| -> f64 {
                 if a == b {
-                    1.0 / self.mass[a - 1] + 1.0 / self.mass[a]
+                    inv[a - 1] + inv[a]
                 } else if a + 1 == b {
-                    -1.0 / self.mass[a]
+                    -inv[a]
                 } else if b + 1 == a {
-                    -1.0 / self.mass[b]
+                    -inv[b]
                 } else {
                     0.0
                 }
@@ -174,7 +228,11 @@ impl Exact {
             let wss = DMatrix::from_fn(ns, ns, |r, q| w(stuck[r], stuck[q]));
             let rhs = DVector::from_fn(ns, |r, _| {
                 let j = stuck[r];
-                let b = if j == 1 { -s0 / self.mass[0] } else { 0.0 };
+                let b = match (j, self.prescribed) {
+                    (1, true) => -ag,
+                    (1, false) => -s0 / self.mass[0],
+                    _ => 0.0,
+                };
                 let wl: f64 = (1..=n)
                     .filter(|&l| !mode.is_stuck(l))
                     .map(|l| w(j, l) * f[l - 1])
@@ -187,6 +245,9 @@ impl Exact {
             }
         }
         let a = DVector::from_fn(self.m, |i, _| {
+            if i == 0 && self.prescribed {
+                return ag;
+            }
             let below = if i == 0 { s0 } else { f[i - 1] };
             let above = if i < n { f[i] } else { 0.0 };
             (below - above) / self.mass[i]
@@ -203,13 +264,16 @@ impl Exact {
         let (au, _) = self.chain(mode, 1.0, 0.0);
         let (av, _) = self.chain(mode, 0.0, 1.0);
         let (af, _) = self.chain_with_force(mode, 0.0, 0.0, 1.0);
+        let (aag, _) = self.chain_full(mode, 0.0, 0.0, 0.0, 1.0);
         let mut h = DMatrix::zeros(dim, dim);
         for i in 0..m {
             h[(i, m + i)] = 1.0;
             h[(m + i, 0)] = au[i] - a0[i];
             h[(m + i, m)] = av[i] - a0[i];
             h[(m + i, 2 * m)] = a0[i];
-            h[(m + i, 2 * m + 1)] = -1.0;
+            // Relative acceleration: A - ag, A depending on ag only on a
+            // prescribed support (exactly 0 for its body 0).
+            h[(m + i, 2 * m + 1)] = (aag[i] - a0[i]) - 1.0;
             h[(m + i, 2 * m + 3)] = af[i] - a0[i];
         }
         h[(2 * m + 1, 2 * m + 2)] = 1.0;
@@ -221,7 +285,7 @@ impl Exact {
         let m = self.m;
         match mode.contact[j] {
             Contact::Stuck => {
-                let (_, f) = self.chain_with_force(mode, z[0], z[m], z[2 * m + 3]);
+                let (_, f) = self.chain_full(mode, z[0], z[m], z[2 * m + 3], z[2 * m + 1]);
                 // Same slack as the engine's consistency tolerance (equal-mu stacks).
                 self.sys.mus[j] * self.normal[j] * (1.0 + mode::CONSISTENCY_TOL) - f[j - 1].abs()
             }
@@ -266,6 +330,8 @@ impl Exact {
             events: 0,
             event_times: vec![],
             u0_history: vec![0.0],
+            e_input: 0.0,
+            e_friction: vec![0.0; n],
         };
         let mut cache: Option<(Mode, f64, DMatrix<f64>, DMatrix<f64>)> = None;
         // Relative displacement of each stuck pair, fixed when it stuck.
@@ -275,14 +341,17 @@ impl Exact {
             // This piece runs from t_a (the previous one's end) to its end.
             let len = piece.t_end - t_a;
             let (a_a, slope) = (piece.ag, piece.ag_rate);
+            // On a prescribed support a jump of ag is an event too.
+            let ag_jump = self.prescribed
+                && (piece.ag - z[2 * m + 1]).abs() > 1e-12 * piece.ag.abs().max(z[2 * m + 1].abs());
             z[2 * m + 1] = a_a;
             z[2 * m + 2] = slope;
             let jump = piece.fext - z[2 * m + 3];
             z[2 * m + 3] = piece.fext;
             z[2 * m + 4] = piece.fext_rate;
-            if jump.abs() > 1e-12 * piece.fext.abs().max(1.0) {
+            if jump.abs() > 1e-12 * piece.fext.abs().max(1.0) || ag_jump {
                 let before = mode;
-                self.switch(&mut mode, &mut z, 0);
+                self.switch_settled(&mut mode, &mut z, 0);
                 for j in 1..m {
                     if mode.is_stuck(j) && !before.is_stuck(j) {
                         offsets[j] = z[j] - z[j - 1];
@@ -347,9 +416,13 @@ impl Exact {
                             let mut at_event = expm(&(h * (f * delta))) * &prev;
                             self.hold_stuck(&mode, &mut at_event, &offsets);
                             self.track_peaks(h, &prev, &at_event, f * delta, &mut res);
+                            self.track_work(&mode, h, &prev, &at_event, f * delta, &mut res);
                             break;
                         }
-                        None => self.track_peaks(h, &prev, &next, delta, &mut res),
+                        None => {
+                            self.track_peaks(h, &prev, &next, delta, &mut res);
+                            self.track_work(&mode, h, &prev, &next, delta, &mut res);
+                        }
                     }
                     prev = next;
                 }
@@ -365,7 +438,7 @@ impl Exact {
                         z[2 * m + 1] = a_a + slope * tau;
                         z[2 * m + 3] = piece.fext + piece.fext_rate * tau;
                         let before = mode;
-                        self.switch(&mut mode, &mut z, located);
+                        self.switch_settled(&mut mode, &mut z, located);
                         for j in 1..m {
                             if mode.is_stuck(j) && !before.is_stuck(j) {
                                 offsets[j] = z[j] - z[j - 1];
@@ -399,6 +472,32 @@ impl Exact {
         }
     }
 
+    /// [`Exact::switch`], and on a prescribed support again while the new
+    /// mode breaks the contact law at once under the support's own
+    /// acceleration `ag` (which it follows between switches): a mode
+    /// resolved with the support's mobility can hold a stick that `ag`
+    /// breaks, or start a slip that `ag` turns back. The engine fires such
+    /// a contact at once and resolves again.
+    fn switch_settled(&self, mode: &mut Mode, z: &mut DVector<f64>, located: usize) {
+        self.switch(mode, z, located);
+        if !self.prescribed {
+            return;
+        }
+        let m = self.m;
+        for _ in 0..8 {
+            let (a, _) = self.chain_full(mode, z[0], z[m], z[2 * m + 3], z[2 * m + 1]);
+            let at_once = (1..m).find(|&j| match mode.contact[j] {
+                Contact::Stuck => self.guard(mode, z, j) < 0.0,
+                Contact::Free => false,
+                c => z[m + j] == z[m + j - 1] && c.slip_sign() * (a[j] - a[j - 1]) < 0.0,
+            });
+            match at_once {
+                Some(j) => self.switch(mode, z, j),
+                None => break,
+            }
+        }
+    }
+
     /// The located guard fires whatever its sign after rounding.
     fn switch(&self, mode: &mut Mode, z: &mut DVector<f64>, located: usize) {
         let m = self.m;
@@ -423,8 +522,14 @@ impl Exact {
             if j - start > 1 {
                 let mm: f64 = (start..j).map(|i| self.mass[i]).sum();
                 let p: f64 = (start..j).map(|i| self.mass[i] * z[m + i]).sum();
+                // A prescribed support keeps its velocity, 0.
+                let v = if start == 0 && self.prescribed {
+                    0.0
+                } else {
+                    p / mm
+                };
                 for i in start..j {
-                    z[m + i] = p / mm;
+                    z[m + i] = v;
                 }
             }
             start = j;
@@ -437,14 +542,64 @@ impl Exact {
         let was_stuck = (1..=n)
             .filter(|&j| mode.is_stuck(j))
             .fold(0, |a, j| a | (1 << j));
+        let load0 = if self.prescribed {
+            // The support's acceleration less its mobility times the force
+            // the stack puts on it in the mode before (`-F_1`).
+            let ag = z[2 * m + 1];
+            let (_, f) = self.chain_full(mode, 0.0, 0.0, 0.0, ag);
+            ag - self.sys.mobility * -f[0]
+        } else {
+            -self.k * z[0] - self.c * z[m] + z[2 * m + 3]
+        };
         let req = ResolveRequest {
             mode: *mode,
             zero,
             must_break,
             was_stuck,
-            load0: -self.k * z[0] - self.c * z[m] + z[2 * m + 3],
+            load0,
         };
         *mode = mode::resolve(&self.sys, &req).mode;
+    }
+
+    /// Input and friction work over a stretch of length `delta` from `a` to
+    /// `b` in `mode`, on a prescribed support (nothing otherwise): there
+    /// every velocity is a polynomial of degree 2 in time (`v_i^(k) = (H^k
+    /// z)_(m+i)`, zero from k = 3) and `ag` one of degree 1, so `-∫ m ag v`
+    /// is integrated exactly; a slipping interface's friction work is
+    /// `muk N |Δ slip|` (its direction holds over the stretch).
+    fn track_work(
+        &self,
+        mode: &Mode,
+        h: &DMatrix<f64>,
+        a: &DVector<f64>,
+        b: &DVector<f64>,
+        delta: f64,
+        res: &mut ExactResult,
+    ) {
+        if !self.prescribed {
+            return;
+        }
+        let m = self.m;
+        let z1 = h * a;
+        let z2 = h * &z1;
+        let (g0, g1) = (a[2 * m + 1], a[2 * m + 2]);
+        let mut work = 0.0;
+        for i in 1..m {
+            // v = c0 + c1 t + c2 t^2, ag = g0 + g1 t over [0, delta].
+            let (c0, c1, c2) = (a[m + i], z1[m + i], 0.5 * z2[m + i]);
+            let d = delta;
+            let integral = g0 * (c0 * d + c1 * d * d / 2.0 + c2 * d.powi(3) / 3.0)
+                + g1 * (c0 * d * d / 2.0 + c1 * d.powi(3) / 3.0 + c2 * d.powi(4) / 4.0);
+            work -= self.mass[i] * integral;
+        }
+        res.e_input += work;
+        for j in 1..m {
+            if !mode.is_stuck(j) && !self.sys.is_free(j) {
+                let slip = |z: &DVector<f64>| z[j] - z[j - 1];
+                res.e_friction[j - 1] +=
+                    self.sys.muk[j] * self.normal[j] * (slip(b) - slip(a)).abs();
+            }
+        }
     }
 
     /// Peak |u0| and |slip| between two exact samples: at the ends and where

@@ -10,7 +10,8 @@ use crate::physics::snapshot::{ByteReader, ByteWriter};
 
 const STATE_MAGIC: &[u8; 8] = b"SLLSTATE";
 /// 4: the count of steps (the time tolerance), and every field checked.
-const STATE_VERSION: u32 = 4;
+/// 5: the engine's support (structure or prescribed) and support mobility.
+const STATE_VERSION: u32 = 5;
 use crate::limits::{self, Num, MAX_PATH_BYTES, MAX_TIME};
 use crate::physics::params::{check_scalar, MAX_BLOCKS};
 use crate::physics::snapshot::SnapshotError;

@@ -34,7 +34,7 @@ impl Simulator {
             zero: self.zero_mask(),
             must_break,
             was_stuck: self.stuck_mask(),
-            load0: self.load0(),
+            load0: self.resolve_load0(),
         };
         let res = mode::resolve(&self.sys, &req);
         self.tries += u64::from(res.tries);
@@ -86,7 +86,12 @@ impl Simulator {
             if has_join {
                 let m: f64 = group.clone().map(|i| self.sys.mass[i]).sum();
                 let p: f64 = group.clone().map(|i| self.sys.mass[i] * self.v[i]).sum();
-                let v = p / m;
+                // A prescribed support keeps its velocity (0).
+                let v = if start == 0 && self.sys.prescribed() {
+                    self.v[0]
+                } else {
+                    p / m
+                };
                 for i in group {
                     self.v[i] = v;
                 }

@@ -123,9 +123,9 @@ impl Flow {
         let inv_mass = d.inv_mass0;
         let (w2, cm) = (sys.k * inv_mass, sys.c * inv_mass);
         let (ag0, fext0) = exc.at(sim.t - t_ref);
-        let q0 = fext0 * inv_mass - ag0;
+        let q0 = d.input_accel(ag0, fext0) - ag0;
         let p0 = d.slip_load[0] * inv_mass + q0;
-        let p1 = exc.fext_rate * inv_mass - exc.ag_rate;
+        let p1 = d.input_accel(exc.ag_rate, exc.fext_rate) - exc.ag_rate;
         taylor_uv(
             [sim.u[0], sim.v[0], p0, p1],
             h,
@@ -277,8 +277,13 @@ impl Simulator {
         let mut events = 0;
         // One degree for every stretch: that of the longest, at the bare
         // structure's rates (the highest of any mode).
-        let (sys, inv_mass) = (&self.sys, 1.0 / self.sys.mass[0]);
-        let deg = degree(t1 - self.t, sys.k * inv_mass, sys.c * inv_mass);
+        let sys = &self.sys;
+        let deg = if sys.prescribed() {
+            degree(t1 - self.t, 0.0, 0.0)
+        } else {
+            let inv_mass = 1.0 / sys.mass[0];
+            degree(t1 - self.t, sys.k * inv_mass, sys.c * inv_mass)
+        };
         let mut flow = Flow::default();
         while self.t < t1 {
             let h = t1 - self.t;

@@ -103,7 +103,13 @@ impl ExactMap {
     /// Builds the map of the cluster of mass `mass` over `h` (already
     /// canonical).
     pub(super) fn new(sys: &System, mass: f64, h: f64) -> ExactMap {
-        let (w2, cm) = (sys.k / mass, sys.c / mass);
+        // A prescribed support has no spring, no damper, and its cluster
+        // may have no mass: the map of no motion (w2 = cm = 0).
+        let (w2, cm) = if sys.prescribed() {
+            (0.0, 0.0)
+        } else {
+            (sys.k / mass, sys.c / mass)
+        };
         // Rows u and v of the Taylor terms T_k = (A h)^k / k!: from
         // T_k = T_(k-1) A h / k, a row x goes to x A h / k, where
         // x A = [-w2 x1, x0 - cm x1, x1, x2] (A is sparse).

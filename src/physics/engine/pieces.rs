@@ -200,7 +200,9 @@ pub fn substeps(length: f64, h_max: f64) -> f64 {
     }
 }
 
-/// Largest internal step for the given settings and structure.
+/// Largest internal step for the given settings and structure. On a
+/// prescribed support (`omega_p = 0`: no spring, no stability bound) it is
+/// `maxStep`, or `ACCURATE_MAX_STEP` when automatic.
 pub fn auto_step(settings: &Settings, omega_p: f64) -> f64 {
     let stable = STABLE_H_OMEGA / omega_p;
     if settings.max_step > 0.0 {

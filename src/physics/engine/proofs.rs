@@ -156,12 +156,24 @@ pub(super) fn stays_positive([g0, d0, g1, d1]: [f64; 4], h: f64, m2: f64) -> boo
     g1 > 0.0 && reach(g0, d0) + reach(g1, -d1) > h
 }
 
+/// The longest substep of the exact default on a prescribed support (s): a
+/// record's sample (5-20 ms) is then one substep, and the proofs' bounds
+/// (`h²/8 |ag'|` on a slip's rate) stay tight.
+pub const PRESCRIBED_MAX_STEP: f64 = 0.02;
+
 impl Simulator {
     /// The longest substep of the exact default: `ω h = MAP_H_OMEGA`, or
     /// `maxStep` where that is shorter (the default stays exact at any
-    /// `maxStep`; a shorter one only costs more substeps).
+    /// `maxStep`; a shorter one only costs more substeps). On a prescribed
+    /// support (no spring, ω = 0) every motion in a piece is a polynomial of
+    /// degree 3 at most and the proofs hold at any length: the substep is
+    /// [`PRESCRIBED_MAX_STEP`], or `maxStep` where shorter.
     pub(super) fn map_step(&self) -> f64 {
-        let h = MAP_H_OMEGA / self.sys.omega_p;
+        let h = if self.sys.omega_p > 0.0 {
+            MAP_H_OMEGA / self.sys.omega_p
+        } else {
+            PRESCRIBED_MAX_STEP
+        };
         if self.settings.max_step > 0.0 {
             h.min(self.settings.max_step)
         } else {

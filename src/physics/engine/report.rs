@@ -31,6 +31,14 @@ pub enum SimError {
         /// The simulator's time when it stopped (a substep's end).
         t: f64,
     },
+    /// A non-zero `Fext` (or slope) on a prescribed support, which has no
+    /// structure for it to act on.
+    NoForceOnSupport {
+        /// `Fext` or `der(Fext)`.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+    },
 }
 
 impl std::fmt::Display for SimError {
@@ -58,6 +66,12 @@ impl std::fmt::Display for SimError {
                  ({:e} internal steps' worth)",
                 Num(*t),
                 crate::limits::MAX_STEPS_PER_CALL
+            ),
+            SimError::NoForceOnSupport { name, value } => write!(
+                f,
+                "{name} = {} is not allowed: it must be 0 on a prescribed support \
+                 (there is no structure for an external force to act on)",
+                Num(*value)
             ),
         }
     }
@@ -130,6 +144,15 @@ pub struct Outputs {
     pub n_events: u64,
     /// Mode resolutions decided by the mus > muk selection rule.
     pub n_ambiguous: u64,
+    /// The force the stack puts on body 0 along +x, `-F_1` (N): a model
+    /// whose floor carries the stack applies it to that floor.
+    pub floor_force: f64,
+    /// Mass of the blocks stuck to body 0 now (body 0 excluded), kg.
+    pub attached_mass: f64,
+    /// `floor_force + attached_mass * apAbs` (N): the friction force of the
+    /// first slipping interface above the attached blocks on them, or
+    /// `floor_force` while interface 1 slips; constant between switches.
+    pub sliding_force: f64,
 }
 
 impl Outputs {
@@ -179,6 +202,9 @@ impl Simulator {
             o.e_friction_of[b] = self.e_friction[j];
         }
         o.e_friction = o.e_friction_of.iter().sum();
+        o.floor_force = d.floor_force(&self.mode, load0);
+        o.attached_mass = d.attached_mass(&self.mode);
+        o.sliding_force = d.sliding_force(&self.mode);
         o
     }
 }

@@ -31,6 +31,7 @@ impl Simulator {
         for x in [s.steps, s.events, s.inconsistent, s.muted, s.ambiguous] {
             w.u64(x);
         }
+        w.f64(self.sys.mobility);
     }
 
     /// Reads a state written by [`Simulator::write_state`].
@@ -75,6 +76,9 @@ impl Simulator {
             muted: r.u64()?,
             ambiguous: r.u64()?,
         };
+        let mobility = r.f64()?;
+        sim.set_support_mobility(mobility)
+            .map_err(|e| format!("in the saved state: {e}"))?;
         sim.check_restored()?;
         Ok(sim)
     }

@@ -15,6 +15,7 @@ pub(super) struct StructureRk4 {
     pub(super) c: f64,
     pub(super) mass0: f64,
     pub(super) inv_mass0: f64,
+    pub(super) ag_gain: f64,
     pub(super) slip_load0: f64,
     pub(super) exc: Excitation,
     pub(super) t_ref: f64,
@@ -27,6 +28,7 @@ impl StructureRk4 {
             c: sys.c,
             mass0: d.mass[0],
             inv_mass0: d.inv_mass0,
+            ag_gain: d.ag_gain,
             slip_load0: d.slip_load[0],
             exc: *exc,
             t_ref,
@@ -39,18 +41,21 @@ impl StructureRk4 {
         self.exc.at(t - self.t_ref)
     }
 
-    /// Absolute acceleration of the structure's cluster at a state.
+    /// Absolute acceleration of the structure's cluster at a state (the
+    /// rule of [`Dynamics::input_accel`]: `ag` itself on a prescribed
+    /// support, where every other term is 0).
     #[inline]
-    pub(super) fn accel(&self, fext: f64, u0: f64, v0: f64) -> f64 {
-        (self.slip_load0 + fext - self.k * u0 - self.c * v0) * self.inv_mass0
+    pub(super) fn accel(&self, ag: f64, fext: f64, u0: f64, v0: f64) -> f64 {
+        (self.slip_load0 + fext - self.k * u0 - self.c * v0) * self.inv_mass0 + ag * self.ag_gain
     }
 
     /// Absolute acceleration of the structure and its time derivative at `t`.
     #[inline]
     pub(super) fn accel_and_jerk(&self, t: f64, u0: f64, v0: f64) -> (f64, f64) {
         let (ag, fext) = self.inputs(t);
-        let a = self.accel(fext, u0, v0);
-        let jerk = (self.exc.fext_rate - self.k * v0 - self.c * (a - ag)) * self.inv_mass0;
+        let a = self.accel(ag, fext, u0, v0);
+        let jerk = (self.exc.fext_rate - self.k * v0 - self.c * (a - ag)) * self.inv_mass0
+            + self.exc.ag_rate * self.ag_gain;
         (a, jerk)
     }
 
@@ -58,7 +63,7 @@ impl StructureRk4 {
     #[inline]
     pub(super) fn rates(&self, t: f64, u0: f64, v0: f64) -> Structure {
         let (ag, fext) = self.inputs(t);
-        let a = self.accel(fext, u0, v0) - ag;
+        let a = self.accel(ag, fext, u0, v0) - ag;
         [v0, a, (fext - ag * self.mass0) * v0, self.c * v0 * v0]
     }
 

@@ -155,6 +155,7 @@ impl Simulator {
         });
         let (mass, inv_mass) = (d.mass[0], d.inv_mass0);
         let load_accel = d.slip_load[0] * inv_mass;
+        let prescribed = sys.prescribed();
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
         // The piece in locals (written back at the end): the loop reads
         // them every substep.
@@ -186,7 +187,7 @@ impl Simulator {
         let mut work = [0.0; 2];
         let mut t0 = self.t;
         let mut inp = Inputs::at(&cur, t0);
-        let mut a_abs = load_accel + inp.fext * inv_mass - w2 * u0 - cm * vel[0];
+        let mut a_abs = load_accel + d.input_accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
         let mut taken = 0u64;
         let mut pending = None;
 
@@ -215,8 +216,10 @@ impl Simulator {
                 let Some((t_end, exc)) = pieces.next_piece() else {
                     break;
                 };
-                // A jump of Fext, or a bad value: the piece is begun anew.
-                if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() {
+                // A jump of Fext, or a bad value: the piece is begun anew;
+                // on a prescribed support a jump of ag too, or any Fext.
+                let on_support = prescribed && (is_jump(exc.ag, inp.ag) || exc.fext_rate != 0.0);
+                if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() || on_support {
                     pending = Some((t_end, exc));
                     break;
                 }
@@ -249,16 +252,16 @@ impl Simulator {
             // of the times.
             let hs = cur.h;
             let t1 = if cur.i == cur.n { cur.t_end } else { t0 + hs };
-            let fext_rate_m = inp.fext_rate * inv_mass;
+            let fext_rate_m = d.input_accel(inp.ag_rate, inp.fext_rate);
             let z = [
                 u0,
                 vel[0],
-                load_accel + inp.fext * inv_mass - inp.ag,
+                load_accel + d.input_accel(inp.ag, inp.fext) - inp.ag,
                 fext_rate_m - inp.ag_rate,
             ];
             let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
             let (ag1, fext1) = (inp.ag + inp.ag_rate * hs, inp.fext + inp.fext_rate * hs);
-            let a1 = load_accel + fext1 * inv_mass - w2 * u1 - cm * v1;
+            let a1 = load_accel + d.input_accel(ag1, fext1) - w2 * u1 - cm * v1;
             let s3 = map.sup_v(3, &z);
             // Stuck interfaces: the absolute acceleration stays in the band.
             // Its rate: A' = Fext'/m - w2 v - cm (A - ag).
@@ -314,7 +317,7 @@ impl Simulator {
                     (!u_proved).then_some(&mut peak_u0),
                     (!a_proved).then_some(&mut peak_a0),
                 ];
-                let cf = load_accel + inp.fext * inv_mass;
+                let cf = load_accel + d.input_accel(inp.ag, inp.fext);
                 let rates = [w2, cm, cf, fext_rate_m];
                 if raise_substep_peaks(peaks, z, map.h, rates, map.degree, [u1, a1]).is_err() {
                     break;

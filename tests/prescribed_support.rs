@@ -1,0 +1,800 @@
+//! A stack on a support whose absolute acceleration is prescribed
+//! (`Support::Prescribed`, shared/MODEL.md "A stack on a support whose motion
+//! is prescribed"): body 0 is the support, pinned to the input `ag`.
+//!
+//! Expected values come from:
+//! - the independent exact reference `common::Exact` (full chain, Delassus
+//!   forces with body 0 of infinite mass moving at `ag`, matrix exponentials,
+//!   events by bisection, exact input and friction work): slips, peaks,
+//!   energies within 1e-9;
+//! - identities that hold for any exact solution: momentum balance of the
+//!   floor force, `sliding_force = floor_force + attached_mass a_s`, the
+//!   energy balance, friction work never falling;
+//! - the structure scene itself: the SDOF structure is this scene closed
+//!   over `-F_1` (MODEL.md), checked on random modes and states, and the
+//!   support's mobility `1 / mp` resolves modes as the monolithic model;
+//! - closed forms in the limits mu -> infinity and mu = 0.
+
+mod common;
+use common::*;
+use stacked_live_load::physics::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
+use stacked_live_load::physics::snapshot::{ByteReader, ByteWriter};
+use stacked_live_load::physics::system::System;
+use stacked_live_load::*;
+
+/// A random stack of `n` blocks on a prescribed support: masses in kg
+/// (mp = 1), mus >= muk (equal on about a third of the interfaces).
+fn random_scene(rng: &mut Rng, n: usize) -> Params {
+    let mut p = Params {
+        n_blocks: n,
+        mp: 1.0,
+        support: Support::Prescribed,
+        ..Params::default()
+    };
+    for j in 0..n {
+        p.alpha[j] = rng.uniform(0.5, 300.0);
+        p.mus[j] = rng.uniform(0.03, 0.4);
+        p.muk[j] = if rng.next_f64() < 0.33 {
+            p.mus[j]
+        } else {
+            p.mus[j] * rng.uniform(0.5, 1.0)
+        };
+    }
+    p
+}
+
+/// Communication steps of random length with their own `ag` and slope: the
+/// support's acceleration continues its ramp or jumps (probability 0.3).
+fn random_inputs(rng: &mut Rng, duration: f64) -> Vec<InputPiece> {
+    let (mut t, mut ag) = (0.0, 0.0);
+    let mut pieces = vec![];
+    while t < duration {
+        let h = rng.uniform(0.002, 0.08);
+        if rng.next_f64() < 0.3 {
+            ag = rng.uniform(-5.0, 5.0);
+        }
+        let mut ag_rate = rng.uniform(-120.0, 120.0);
+        if (ag + ag_rate * h).abs() > 6.0 {
+            ag_rate = -ag_rate;
+        }
+        t += h;
+        pieces.push(InputPiece {
+            t_end: t,
+            ag,
+            ag_rate,
+            fext: 0.0,
+            fext_rate: 0.0,
+        });
+        ag += ag_rate * h;
+    }
+    pieces
+}
+
+fn excitation(piece: &InputPiece) -> Excitation {
+    Excitation {
+        ag: piece.ag,
+        ag_rate: piece.ag_rate,
+        ..Default::default()
+    }
+}
+
+/// Worst values of the per-instant checks.
+#[derive(Default, Debug)]
+struct Worst {
+    momentum: f64,
+    sliding: f64,
+    residual: f64,
+}
+
+/// The checks after every communication step: the support does not move
+/// relative to itself; the floor force balances the blocks' momentum
+/// (`floor_force = -Σ m_j a_j`, 1e-12 of `Σ m_j |a_j|`); `sliding_force =
+/// floor_force + attached_mass a_s` (same scale) and unchanged, bit for bit,
+/// while no switch happened; `attached_mass` the blocks stuck to the
+/// support; friction work never falls; the energy balance.
+struct Checker {
+    mass: Vec<f64>,
+    last: Option<Outputs>,
+    worst: Worst,
+}
+
+impl Checker {
+    fn new(p: &Params) -> Checker {
+        Checker {
+            mass: (0..p.n_blocks).map(|j| p.alpha[j] * p.mp).collect(),
+            last: None,
+            worst: Worst::default(),
+        }
+    }
+
+    fn check(&mut self, o: &Outputs, a_s: f64, label: &str) {
+        let n = self.mass.len();
+        assert!(o.up == 0.0 && o.vp == 0.0 && o.base_shear == 0.0, "{label}");
+        assert!(o.e_strain == 0.0 && o.e_viscous == 0.0, "{label}");
+        assert!(
+            (o.ap_abs - a_s).abs() <= 1e-13 * a_s.abs().max(1.0),
+            "{label}: apAbs {} is not the support's acceleration {a_s}",
+            o.ap_abs
+        );
+        let a_s = o.ap_abs;
+        let momentum: f64 = (0..n).map(|j| self.mass[j] * o.ab_abs[j]).sum();
+        let scale: f64 = (0..n)
+            .map(|j| (self.mass[j] * o.ab_abs[j]).abs())
+            .sum::<f64>()
+            + o.floor_force.abs()
+            + 1e-300;
+        let e = (o.floor_force + momentum).abs() / scale;
+        assert!(
+            e < 1e-12,
+            "{label}: floor force {} vs -Σ m a {}",
+            o.floor_force,
+            -momentum
+        );
+        self.worst.momentum = self.worst.momentum.max(e);
+        let e = (o.sliding_force - (o.floor_force + o.attached_mass * a_s)).abs() / scale;
+        assert!(e < 1e-12, "{label}: sliding force {}", o.sliding_force);
+        self.worst.sliding = self.worst.sliding.max(e);
+        let attached: f64 = (0..n)
+            .take_while(|&j| o.stuck[j])
+            .map(|j| self.mass[j])
+            .sum();
+        assert!(
+            (o.attached_mass - attached).abs() <= 1e-14 * attached,
+            "{label}: attached mass {} vs {attached}",
+            o.attached_mass
+        );
+        if let Some(last) = &self.last {
+            if last.n_events == o.n_events {
+                assert_eq!(
+                    last.sliding_force, o.sliding_force,
+                    "{label}: sliding force changed without a switch at t = {}",
+                    o.t
+                );
+            }
+            for j in 0..n {
+                let before = last.e_friction_of[j];
+                assert!(
+                    o.e_friction_of[j] >= before - 1e-12 * before.abs().max(1e-9),
+                    "{label}: Efriction[{}] fell at t = {}",
+                    j + 1,
+                    o.t
+                );
+            }
+        }
+        let residual = o.energy_residual().abs() / o.e_input.abs().max(1e-9);
+        self.worst.residual = self.worst.residual.max(residual);
+        self.last = Some(o.clone());
+    }
+}
+
+/// Slips, peak slips, displacements and energies against the reference
+/// (1e-9 of their scales); returns the worst relative difference.
+fn compare(o: &Outputs, exact: &ExactResult, label: &str) -> f64 {
+    let n = exact.peak_slip.len();
+    let mut worst = 0.0f64;
+    let scale_u = exact.u.iter().fold(1e-6f64, |m, x| m.max(x.abs()));
+    for j in 0..n {
+        worst = worst.max(rel_slip(o.peak_slip[j], exact.peak_slip[j]));
+        let slip = exact.u[j + 1] - exact.u[j];
+        worst = worst.max((o.slip[j] - slip).abs() / scale_u);
+        worst = worst.max((o.ub[j] - exact.u[j + 1]).abs() / scale_u);
+    }
+    let scale_e = exact.e_input.abs().max(1e-9);
+    worst = worst.max((o.e_input - exact.e_input).abs() / scale_e);
+    for j in 0..n {
+        worst = worst.max((o.e_friction_of[j] - exact.e_friction[j]).abs() / scale_e);
+    }
+    assert!(
+        worst < 1e-9,
+        "{label}: differs from the exact reference by {worst:.2e}\n engine {:?} {} {:?}\n exact {:?} {} {:?}",
+        &o.peak_slip[..n],
+        o.e_input,
+        &o.e_friction_of[..n],
+        exact.peak_slip,
+        exact.e_input,
+        exact.e_friction
+    );
+    assert_eq!(o.up, 0.0);
+    assert_eq!(exact.u[0], 0.0, "{label}: the reference's support moved");
+    worst
+}
+
+#[test]
+fn random_stacks_under_ramps_and_jumps_match_the_exact_reference() {
+    // 1..8 blocks, mus >= muk, a_s piecewise linear with jumps at random
+    // communication points; half the scenes with a support mobility (the
+    // reference resolves with the same rule, its F_old from its own
+    // Delassus forces). Every step: the per-instant checks and the saved
+    // state accepted; halfway, a saved state continues bit for bit.
+    let mut rng = Rng(0x5_0bb0_22);
+    let mut worst = 0.0f64;
+    let mut checks = Worst::default();
+    let (mut switches, mut ambiguous) = (0, 0);
+    for case in 0..32 {
+        let n = 1 + case % 8;
+        let p = random_scene(&mut rng, n);
+        let total: f64 = p.alpha[..n].iter().sum();
+        let mobility = if case % 2 == 1 {
+            rng.uniform(0.0, 3.0) / total
+        } else {
+            0.0
+        };
+        let pieces = random_inputs(&mut rng, 2.0);
+        let label = format!("case {case} ({n} blocks, mobility {mobility:.3e})");
+        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        sim.set_support_mobility(mobility).unwrap();
+        let mut checker = Checker::new(&p);
+        let half = pieces.len() / 2;
+        let mut copy = None;
+        for (i, piece) in pieces.iter().enumerate() {
+            sim.advance(piece.t_end, &excitation(piece)).unwrap();
+            // ag at the step's end.
+            let t0 = if i == 0 { 0.0 } else { pieces[i - 1].t_end };
+            let a_s = piece.ag + piece.ag_rate * (piece.t_end - t0);
+            checker.check(&sim.outputs(), a_s, &label);
+            let mut w = ByteWriter::default();
+            sim.write_state(&mut w);
+            let back = Simulator::read_state(&mut ByteReader::new(&w.buf))
+                .unwrap_or_else(|e| panic!("{label}: own saved state refused: {e}"));
+            assert_eq!(back.outputs(), sim.outputs(), "{label}");
+            assert_eq!(back.support_mobility(), mobility);
+            if i == half {
+                copy = Some(back);
+            }
+        }
+        let mut copy = copy.unwrap();
+        for piece in &pieces[half + 1..] {
+            copy.advance(piece.t_end, &excitation(piece)).unwrap();
+        }
+        assert_eq!(
+            copy.outputs(),
+            sim.outputs(),
+            "{label}: restored run differs"
+        );
+        let exact = Exact::new(&p)
+            .with_mobility(mobility)
+            .run_pieces(0.0, &pieces, 16);
+        let o = sim.outputs();
+        worst = worst.max(compare(&o, &exact, &label));
+        checks.momentum = checks.momentum.max(checker.worst.momentum);
+        checks.sliding = checks.sliding.max(checker.worst.sliding);
+        checks.residual = checks.residual.max(checker.worst.residual);
+        switches += exact.events;
+        ambiguous += o.n_ambiguous;
+    }
+    assert!(switches > 300, "only {switches} switches");
+    assert!(
+        checks.residual < 1e-12,
+        "energy residual {:.2e} of the input",
+        checks.residual
+    );
+    println!(
+        "worst vs reference {worst:.2e}, {switches} switches ({ambiguous} decided by the \
+         mus > muk rule); worst momentum {:.2e}, sliding identity {:.2e}, energy residual {:.2e}",
+        checks.momentum, checks.sliding, checks.residual
+    );
+}
+
+#[test]
+fn random_stacks_under_broadband_records_match_the_exact_reference() {
+    let mut rng = Rng(0xb10a_d22);
+    let mut worst = 0.0f64;
+    let mut residual = 0.0f64;
+    let mut switches = 0;
+    for case in 0..12 {
+        let n = 1 + case % 8;
+        let p = random_scene(&mut rng, n);
+        let gm = broadband_record(&mut rng, 6.0, [0.005, 0.01, 0.02][case % 3]);
+        let gm = scaled_to_pga(&gm, rng.uniform(0.5, 1.0) * p.g);
+        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        let mut checker = Checker::new(&p);
+        let label = format!("record case {case} ({n} blocks)");
+        let mut i = 1;
+        run_sampled(&mut sim, &gm, |s| {
+            checker.check(&s.outputs(), gm.accel[i], &label);
+            i += 1;
+        });
+        let exact = Exact::new(&p).run(&gm, 16);
+        worst = worst.max(compare(&sim.outputs(), &exact, &label));
+        residual = residual.max(checker.worst.residual);
+        switches += exact.events;
+    }
+    assert!(switches > 60, "only {switches} switches");
+    assert!(residual < 1e-12, "energy residual {residual:.2e}");
+    println!(
+        "worst vs reference {worst:.2e} over {switches} switches; energy residual {residual:.2e}"
+    );
+}
+
+/// A structure scene and the prescribed scene of the same blocks: the
+/// structure's mass a power of two so that its blocks' masses `alpha mp`
+/// are the prescribed scene's bit for bit.
+fn twin_scenes(rng: &mut Rng, n: usize) -> (Params, Params) {
+    let prescribed = random_scene(rng, n);
+    let mf = 2f64.powi(rng.below(12) as i32 - 2);
+    let mut structure = Params {
+        n_blocks: n,
+        mp: mf,
+        tp: rng.uniform(0.1, 3.0),
+        zeta: rng.uniform(0.0, 0.2),
+        ..prescribed.clone()
+    };
+    structure.support = Support::Structure;
+    for j in 0..n {
+        structure.alpha[j] = prescribed.alpha[j] / mf;
+    }
+    (structure, prescribed)
+}
+
+fn random_mode(rng: &mut Rng, sys: &System) -> Mode {
+    let mut mode = Mode::all_stuck(sys);
+    for j in 1..=sys.n {
+        mode.contact[j] =
+            [Contact::Stuck, Contact::SlipForward, Contact::SlipBackward][rng.below(3)];
+    }
+    mode
+}
+
+#[test]
+fn the_structure_is_the_prescribed_scene_closed_over_the_floor_force() {
+    // MODEL.md: the stack on an SDOF structure is the prescribed scene with
+    // a_s = u0'' + ag and the structure's equation closed over -F_1. Exact
+    // at the level of one mode: for random modes and states (u0, v0, Fext),
+    // with a_s the structure's absolute acceleration, every block's
+    // absolute acceleration and every interface force of the prescribed
+    // scene equal the structure's (1e-13 of the forces' scale), and the
+    // structure's equation mp A0 + c v0 + k u0 = floor_force + Fext holds
+    // with the prescribed scene's floor force (1e-13 of its terms).
+    let mut rng = Rng(0x1de_27);
+    let mut worst = 0.0f64;
+    for case in 0..4000 {
+        let n = 1 + case % 8;
+        let (ps, pp) = twin_scenes(&mut rng, n);
+        let (ss, sp) = (System::new(&ps).unwrap(), System::new(&pp).unwrap());
+        let mode = random_mode(&mut rng, &ss);
+        let (ds, dp) = (Dynamics::new(&ss, &mode), Dynamics::new(&sp, &mode));
+        let weight = ss.normal[1];
+        let u0 = rng.uniform(-1.0, 1.0) * weight / ss.k;
+        let v0 = rng.uniform(-1.0, 1.0) * weight / ss.c.max(1e-9);
+        let fext = rng.uniform(-1.0, 1.0) * weight;
+        let load_s = Dynamics::structure_load(&ss, u0, v0, fext);
+        let a0 = ds.accel0(load_s);
+        let load_p = Dynamics::load0(&sp, 0.0, 0.0, a0, 0.0);
+        assert_eq!(dp.accel0(load_p), a0, "a_s is the support's acceleration");
+        let scale = weight * (1.0 + ss.mus[1..=n].iter().fold(0.0f64, |m, x| m.max(*x)))
+            + ss.total_mass() * a0.abs();
+        for j in 1..=n {
+            let (cs, cp) = (ds.cluster_of[j], dp.cluster_of[j]);
+            assert_eq!(cs, cp);
+            let e = (ds.accel(cs, load_s) - dp.accel(cp, load_p)).abs() * ss.mass[j] / scale;
+            worst = worst.max(e);
+            let e = (ds.force(j, &mode, load_s) - dp.force(j, &mode, load_p)).abs() / scale;
+            worst = worst.max(e);
+        }
+        let closed = ss.mass[0] * a0 + ss.c * v0 + ss.k * u0 - dp.floor_force(&mode, load_p) - fext;
+        let terms = (ss.mass[0] * a0).abs() + (ss.c * v0).abs() + (ss.k * u0).abs() + fext.abs();
+        worst = worst.max(closed.abs() / (terms + scale));
+        assert!(worst < 1e-13, "case {case}: {worst:.2e}");
+    }
+    println!("worst relative difference {worst:.2e}");
+}
+
+/// The request of a resolution at a random instant: interfaces of `old`
+/// stuck, some slipping ones coming to rest (zero relative velocity), a
+/// few stuck ones that must break.
+fn random_request(rng: &mut Rng, sys: &System, old: Mode, load0: f64) -> ResolveRequest {
+    let (mut zero, mut must_break, mut was_stuck) = (0u32, 0u32, 0u32);
+    for j in 1..=sys.n {
+        if old.is_stuck(j) {
+            zero |= 1 << j;
+            was_stuck |= 1 << j;
+            if rng.next_f64() < 0.15 {
+                must_break |= 1 << j;
+            }
+        } else if rng.next_f64() < 0.6 {
+            zero |= 1 << j;
+        }
+    }
+    ResolveRequest {
+        mode: old,
+        zero,
+        must_break,
+        was_stuck,
+        load0,
+    }
+}
+
+#[test]
+fn mobility_one_over_mp_resolves_modes_as_the_monolithic_structure() {
+    // The monolithic model (structure + stack, mass mp) resolves a mode with
+    // A0 = (s' + load0) / (mp + M'); the prescribed scene with a_s the
+    // structure's A0 in the old mode, F_old its floor force then, and
+    // mobility 1/mp must choose the same mode, with the cluster on the
+    // support at the same acceleration (1e-12). Random modes and states,
+    // mus > muk on most interfaces: some instants have several consistent
+    // continuations (counted by `mode::consistent_count`), and some are
+    // decided differently with mobility 0 (a support that does not yield).
+    let mut rng = Rng(0x0b_11e);
+    let (mut ambiguous, mut differs_at_zero, mut worst) = (0, 0, 0.0f64);
+    for case in 0..20000 {
+        let n = 1 + case % 8;
+        let (ps, pp) = twin_scenes(&mut rng, n);
+        let ss = System::new(&ps).unwrap();
+        let mut sp = System::new(&pp).unwrap();
+        let mb = 1.0 / ps.mp;
+        sp.mobility = mb;
+        let old = random_mode(&mut rng, &ss);
+        // States around the sticks' limits, so that every outcome occurs.
+        let weight = ss.normal[1];
+        let load_s = rng.uniform(-2.0, 2.0) * weight * (1.0 + ps.mp / ss.total_mass());
+        let a_s = Dynamics::new(&ss, &old).accel0(load_s);
+        let dp_old = Dynamics::new(&sp, &old);
+        let f_old = dp_old.floor_force(&old, a_s);
+        let req_s = random_request(&mut rng, &ss, old, load_s);
+        let req_p = ResolveRequest {
+            load0: a_s - mb * f_old,
+            ..req_s
+        };
+        let (rs, rp) = (mode::resolve(&ss, &req_s), mode::resolve(&sp, &req_p));
+        assert_eq!(rs.mode, rp.mode, "case {case}: a_s {a_s}");
+        assert_eq!(rs.consistent, rp.consistent, "case {case}");
+        if mode::consistent_count(&sp, &req_p) > 1 {
+            ambiguous += 1;
+        }
+        // The new mode's acceleration of the cluster on the support.
+        let new = rp.mode;
+        let dp = Dynamics::new(&sp, &new);
+        let a_new = (a_s + mb * (dp.slip_load[0] - f_old)) / (1.0 + mb * dp.attached_mass(&new));
+        let a_mono = Dynamics::new(&ss, &new).accel0(load_s);
+        let e = (a_new - a_mono).abs() / (a_mono.abs() + ss.g * 1e-3);
+        worst = worst.max(e);
+        assert!(e < 1e-12, "case {case}: {a_new} vs {a_mono}");
+        // Mobility 0: the support's acceleration stays a_s whatever the mode.
+        let mut s0 = sp.clone();
+        s0.mobility = 0.0;
+        let r0 = mode::resolve(
+            &s0,
+            &ResolveRequest {
+                load0: a_s,
+                ..req_s
+            },
+        );
+        differs_at_zero += usize::from(r0.mode != rp.mode);
+    }
+    assert!(
+        ambiguous > 100,
+        "only {ambiguous} instants with several consistent modes"
+    );
+    assert!(
+        differs_at_zero > 100,
+        "mobility changed only {differs_at_zero} decisions"
+    );
+    println!(
+        "{ambiguous} instants with several consistent continuations, {differs_at_zero} decided \
+         differently by a support that does not yield; worst acceleration {worst:.2e}"
+    );
+}
+
+#[test]
+fn with_mobility_zero_the_resolved_mode_is_consistent_with_the_support_moving_at_a_s() {
+    // m_b = 0: the resolution holds the support at a_s. Checked with the
+    // reference's Delassus forces (body 0 of infinite mass at a_s): every
+    // stuck interface of the chosen mode within mus N (with the resolver's
+    // 1e-10 slack), every interface it starts slipping accelerating in its
+    // direction of slip.
+    let mut rng = Rng(0x2e80);
+    for case in 0..3000 {
+        let n = 1 + case % 8;
+        let p = random_scene(&mut rng, n);
+        let sys = System::new(&p).unwrap();
+        let old = random_mode(&mut rng, &sys);
+        let a_s = rng.uniform(-1.0, 1.0) * sys.g * 0.5;
+        let req = random_request(&mut rng, &sys, old, a_s);
+        let res = mode::resolve(&sys, &req);
+        if !res.consistent {
+            continue;
+        }
+        let (a, f) = Exact::new(&p).chain_full(&res.mode, 0.0, 0.0, 0.0, a_s);
+        assert_eq!(a[0], a_s);
+        for j in 1..=n {
+            let limit = sys.mus[j] * sys.normal[j];
+            if req.zero & (1 << j) == 0 {
+                continue;
+            }
+            match res.mode.contact[j] {
+                Contact::Stuck => assert!(
+                    f[j - 1].abs() <= limit * (1.0 + 1e-9),
+                    "case {case}: interface {j} holds {} > {limit}",
+                    f[j - 1]
+                ),
+                c => {
+                    let rel_accel = a[j] - a[j - 1];
+                    assert!(
+                        c.slip_sign() * rel_accel >= -1e-9 * sys.g,
+                        "case {case}: interface {j} slips against its acceleration"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_block_coming_to_rest_on_a_yielding_floor() {
+    // One block (mus 0.08, muk 0.05, as issue #22's El Centro run) slips
+    // backward on a floor at constant a_s = -0.07 g; its relative velocity
+    // reaches 0 at t* = v / ((muk + 0.07) g). With a_s held (mobility 0),
+    // both stick and slipping forward are consistent, and the rule sticks.
+    // Expected: the switch at t* (1e-12 s), the block stuck after it, the
+    // floor force then -m a_s; with mobility 1/m (a floor as heavy as the
+    // block) the monolithic model sticks too, and the engine with it.
+    let m = 40.0;
+    let mut p = Params {
+        n_blocks: 1,
+        mp: 1.0,
+        support: Support::Prescribed,
+        ..Params::default()
+    };
+    (p.alpha[0], p.mus[0], p.muk[0]) = (m, 0.08, 0.05);
+    let g = p.g;
+    let a_s = -0.07 * g;
+    let v = -0.3;
+    let t_star = -v / ((0.05 + 0.07) * g);
+    for mobility in [0.0, 1.0 / m] {
+        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        sim.set_support_mobility(mobility).unwrap();
+        let exc = Excitation {
+            ag: a_s,
+            ..Default::default()
+        };
+        sim.advance(0.0, &exc).unwrap();
+        sim.set_state(&[0.0, 0.0], &[0.0, v]);
+        assert_eq!(sim.mode().contact[1], Contact::SlipBackward);
+        sim.watch_switches();
+        sim.advance(1.0, &exc).unwrap();
+        assert!(
+            (sim.first_switch() - t_star).abs() < 1e-12,
+            "{}",
+            sim.first_switch()
+        );
+        let o = sim.outputs();
+        assert!(o.stuck[0], "mobility {mobility}");
+        // Held at a_s, slipping forward was consistent too; on a floor that
+        // yields (as heavy as the block) only the stick is.
+        assert_eq!(o.n_ambiguous, u64::from(mobility == 0.0));
+        assert_eq!(o.floor_force, -(m * a_s));
+        assert_eq!(o.attached_mass, m);
+        assert_eq!(o.sliding_force, 0.0);
+    }
+}
+
+#[test]
+fn infinite_friction_carries_every_block_with_the_support() {
+    // mu -> infinity (mus = muk = 1e6): no slip ever, every block at a_s,
+    // floor_force = -(Σ m) a_s exactly (the mass summed from the top, as
+    // the engine sums the mass above an interface), no work.
+    let mut rng = Rng(0x1f1);
+    for case in 0..8 {
+        let n = 1 + case;
+        let mut p = random_scene(&mut rng, n);
+        for j in 0..n {
+            (p.mus[j], p.muk[j]) = (1e6, 1e6);
+        }
+        let total = (0..n).rev().fold(0.0, |s, j| s + p.alpha[j]);
+        let pieces = random_inputs(&mut rng, 2.0);
+        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        let mut t0 = 0.0;
+        for piece in &pieces {
+            sim.advance(piece.t_end, &excitation(piece)).unwrap();
+            let a_s = piece.ag + piece.ag_rate * (piece.t_end - t0);
+            t0 = piece.t_end;
+            let o = sim.outputs();
+            assert_eq!(o.floor_force, -(total * a_s), "case {case}");
+            assert_eq!(o.attached_mass, total);
+            assert_eq!(o.sliding_force, 0.0);
+            for j in 0..n {
+                assert!(o.stuck[j] && o.slip[j] == 0.0 && o.ub[j] == 0.0 && o.vb[j] == 0.0);
+                assert_eq!(o.ab_abs[j], a_s);
+            }
+            assert!(o.e_input == 0.0 && o.e_friction == 0.0 && o.e_kinetic == 0.0);
+        }
+        assert_eq!(sim.outputs().peak_slip, [0.0; MAX_BLOCKS]);
+        assert_eq!(sim.outputs().n_events, 0);
+    }
+}
+
+#[test]
+fn without_friction_the_blocks_stay_where_they_were() {
+    // mu = 0: no force on any block (floor force 0, absolute accelerations
+    // 0), so each block's displacement relative to the support is minus the
+    // support's own displacement, the double integral of the piecewise-linear
+    // a_s (closed form per piece); expected within 1e-12 of its peak.
+    let mut rng = Rng(0x0);
+    for case in 0..4 {
+        let n = 1 + 2 * case;
+        let mut p = random_scene(&mut rng, n);
+        for j in 0..n {
+            (p.mus[j], p.muk[j]) = (0.0, 0.0);
+        }
+        let pieces = random_inputs(&mut rng, 3.0);
+        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        let (mut x, mut v, mut t0, mut peak) = (0.0f64, 0.0f64, 0.0, 0.0f64);
+        for piece in &pieces {
+            sim.advance(piece.t_end, &excitation(piece)).unwrap();
+            let (h, a, r) = (piece.t_end - t0, piece.ag, piece.ag_rate);
+            x += v * h - a * h * h / 2.0 - r * h * h * h / 6.0;
+            v -= a * h + r * h * h / 2.0;
+            t0 = piece.t_end;
+            peak = peak.max(x.abs());
+            let o = sim.outputs();
+            assert_eq!(o.floor_force, 0.0);
+            assert_eq!(o.sliding_force, 0.0);
+            assert_eq!(o.attached_mass, 0.0);
+            for j in 0..n {
+                assert_eq!(o.ab_abs[j], 0.0);
+                assert!(!o.stuck[j]);
+                assert!((o.ub[j] - x).abs() <= 1e-12 * peak.max(1e-3), "case {case}");
+                assert!(
+                    (o.vb[j] - v).abs() <= 1e-12 * v.abs().max(1.0),
+                    "case {case}"
+                );
+            }
+            assert_eq!(o.e_friction, 0.0);
+        }
+        let o = sim.outputs();
+        let residual = o.energy_residual().abs() / o.e_kinetic.max(1e-9);
+        assert!(residual < 1e-12, "case {case}: {residual:.2e}");
+    }
+}
+
+#[test]
+fn bad_scenes_and_inputs_are_refused_by_name() {
+    // A prescribed support without blocks; a mobility negative, NaN,
+    // infinite or above 1e9; a non-zero Fext or der(Fext): clear errors,
+    // no panic, the state left as it was.
+    let p = Params {
+        n_blocks: 0,
+        mp: 1.0,
+        support: Support::Prescribed,
+        ..Params::default()
+    };
+    let e = Simulator::new(&p, &Settings::default()).unwrap_err();
+    assert_eq!(e.field, "nBlocks");
+    assert!(
+        e.to_string()
+            .contains("from 1 to 8 on a prescribed support"),
+        "{e}"
+    );
+    let p = Params {
+        n_blocks: 2,
+        support: Support::Prescribed,
+        ..Params::default()
+    };
+    let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+    for bad in [
+        -1.0,
+        -1e-300,
+        f64::NAN,
+        f64::INFINITY,
+        1.0001e9,
+        f64::NEG_INFINITY,
+    ] {
+        let e = sim.set_support_mobility(bad).unwrap_err();
+        assert_eq!(e.field, "supportMobility");
+        assert!(e.to_string().contains("from 0 to 1e9"), "{e}");
+    }
+    assert_eq!(sim.support_mobility(), 0.0);
+    sim.set_support_mobility(1e9).unwrap();
+    sim.set_support_mobility(0.0).unwrap();
+    for (fext, fext_rate, name) in [(5.0, 0.0, "Fext"), (0.0, -3.0, "der(Fext)")] {
+        let exc = Excitation {
+            ag: 1.0,
+            fext,
+            fext_rate,
+            ..Default::default()
+        };
+        let e = sim.advance(0.1, &exc).unwrap_err();
+        assert!(
+            matches!(e, SimError::NoForceOnSupport { name: n, .. } if n == name),
+            "{e:?}"
+        );
+        assert!(
+            e.to_string().contains("must be 0 on a prescribed support"),
+            "{e}"
+        );
+        assert_eq!(sim.time(), 0.0);
+    }
+    // Fext arriving in a later piece of a run is refused too.
+    let pieces = [
+        (0.1, Excitation::default()),
+        (
+            0.2,
+            Excitation {
+                fext_rate: 1.0,
+                ..Default::default()
+            },
+        ),
+    ];
+    assert!(matches!(
+        sim.advance_pieces(pieces),
+        Err(SimError::NoForceOnSupport { .. })
+    ));
+    // The regularized baseline has no prescribed support.
+    let e = stacked_live_load::physics::regularized::RegularizedSimulator::new(&p, 1e-3, 1e-4)
+        .unwrap_err();
+    assert_eq!(e.field, "support");
+}
+
+#[test]
+fn the_floor_outputs_hold_on_a_structure_too() {
+    // On a structure the same outputs, with apAbs for a_s: floor_force =
+    // -Σ m_j a_j over the blocks, sliding_force = floor_force +
+    // attached_mass apAbs and unchanged between switches (the Checker's
+    // checks but the support's), and the structure's equation closed over
+    // the floor force: mp apAbs + baseShear = floor_force + Fext (1e-12 of
+    // its terms). Issue #21's tall stack (mus > muk) under a broadband
+    // record, sample by sample.
+    let p = graded_stack_static_above_kinetic();
+    let mut rng = Rng(0x5c0);
+    let gm = scaled_to_pga(&broadband_record(&mut rng, 6.0, 0.01), 1.0 * p.g);
+    let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+    let mass: Vec<f64> = (0..p.n_blocks).map(|j| p.alpha[j] * p.mp).collect();
+    let mut last: Option<Outputs> = None;
+    let mut worst = 0.0f64;
+    run_sampled(&mut sim, &gm, |s| {
+        let o = s.outputs();
+        let momentum: f64 = (0..mass.len()).map(|j| mass[j] * o.ab_abs[j]).sum();
+        let scale: f64 = (0..mass.len())
+            .map(|j| (mass[j] * o.ab_abs[j]).abs())
+            .sum::<f64>()
+            + o.floor_force.abs();
+        worst = worst.max((o.floor_force + momentum).abs() / scale);
+        let sliding = o.floor_force + o.attached_mass * o.ap_abs;
+        worst = worst.max((o.sliding_force - sliding).abs() / scale);
+        let closed = p.mp * o.ap_abs + o.base_shear - o.floor_force;
+        worst = worst.max(closed.abs() / ((p.mp * o.ap_abs).abs() + o.base_shear.abs() + scale));
+        if let Some(l) = &last {
+            if l.n_events == o.n_events {
+                assert_eq!(l.sliding_force, o.sliding_force, "t = {}", o.t);
+            }
+        }
+        last = Some(o);
+    });
+    assert!(worst < 1e-12, "{worst:.2e}");
+    assert!(sim.outputs().n_events > 20, "{}", sim.outputs().n_events);
+    println!("worst {worst:.2e} over {} switches", sim.outputs().n_events);
+}
+
+#[test]
+fn the_step_end_baseline_runs_a_prescribed_support_too() {
+    // Solver 2 (RK4, switches at step ends) on a prescribed support: the
+    // support does not move relative to itself, and with maxStep 1e-4 s the
+    // peak slips are within 2e-3 of the exact default's (first order in the
+    // step at every switch; measured below 1e-3).
+    let mut rng = Rng(0x57e9);
+    let mut worst = 0.0f64;
+    for case in 0..4 {
+        let p = random_scene(&mut rng, 1 + 2 * case);
+        let pieces = random_inputs(&mut rng, 2.0);
+        let baseline = Settings {
+            method: Method::StepEnd,
+            max_step: 1e-4,
+        };
+        let (mut exact, mut rk) = (
+            Simulator::new(&p, &Settings::default()).unwrap(),
+            Simulator::new(&p, &baseline).unwrap(),
+        );
+        for piece in &pieces {
+            exact.advance(piece.t_end, &excitation(piece)).unwrap();
+            rk.advance(piece.t_end, &excitation(piece)).unwrap();
+        }
+        let (a, b) = (exact.outputs(), rk.outputs());
+        assert!(b.up == 0.0 && b.vp == 0.0 && b.e_viscous == 0.0);
+        let scale = a.peak_slip.iter().fold(1e-3f64, |m, x| m.max(*x));
+        for j in 0..p.n_blocks {
+            worst = worst.max((a.peak_slip[j] - b.peak_slip[j]).abs() / scale);
+        }
+    }
+    assert!(worst < 2e-3, "{worst:.2e}");
+    println!("worst {worst:.2e}");
+}
