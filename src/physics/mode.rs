@@ -436,6 +436,32 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
     worst
 }
 
+/// Whether `mode` satisfies the contact law at the interfaces of `zero`
+/// (free ones excluded by the caller): [`violation`] `<= CONSISTENCY_TOL`,
+/// decided cluster by cluster with the same [`cluster_law`], skipping the
+/// clusters that decide nothing (no interface of `zero` at their bottom,
+/// inside, or at their top, where the cluster above needs their
+/// acceleration) and stopping at the first that breaks the law.
+fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
+    let (mut bottom, mut accel_below) = (0, 0.0);
+    for end in 1..=sys.n + 1 {
+        if end <= sys.n && mode.is_stuck(end) {
+            continue;
+        }
+        // Bits bottom..=end (bit 0 and bit n + 1 are never in `zero`).
+        let span = (2u32 << end) - (1u32 << bottom);
+        if zero & span != 0 {
+            let (accel, w) = cluster_law(sys, mode, zero, load0, [bottom, end], accel_below);
+            if w > CONSISTENCY_TOL {
+                return false;
+            }
+            accel_below = accel;
+        }
+        bottom = end;
+    }
+    true
+}
+
 /// Interfaces (bit j) that carry no friction.
 fn free_mask(sys: &System) -> u32 {
     (1..=sys.n)
@@ -655,7 +681,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
                 Contact::SlipForward
             };
         }
-        if violation(sys, &mode, zero, req.load0) <= CONSISTENCY_TOL {
+        if consistent(sys, &mode, zero, req.load0) {
             return Some(Resolved {
                 mode,
                 consistent: true,
