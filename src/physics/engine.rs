@@ -138,15 +138,23 @@ impl Simulator {
         if sim.exact {
             sim.h_max = sim.map_step();
         }
+        sim.take_reference();
         sim.resolve_mode(0);
+        sim.take_reference();
         sim.stats.events = 0;
         sim.last_event = f64::NAN;
         Ok(sim)
     }
 
-    /// Back to rest at t = 0 with the same scene.
+    /// Back to rest at t = 0 with the same scene (and support mobility);
+    /// the reference mode is the mode at rest.
     pub fn reset(&mut self) {
+        let mobility = self.sys.mobility;
         *self = Simulator::new(&self.params, &self.settings).expect("validated before");
+        self.sys.mobility = mobility;
+        if mobility != 0.0 && self.sys.prescribed() {
+            self.rebuild_dynamics();
+        }
     }
 
     /// Sets the displacement and velocity of every body (relative to the
@@ -177,9 +185,14 @@ impl Simulator {
             }
         }
         // The resolution rebuilds the dynamics only when it changes the
-        // mode: the slips set here must have theirs already.
+        // mode: the slips set here must have theirs already (the slips set
+        // here are the reference of the resolution, the mode it gives the
+        // reference from then on).
+        self.dyn_cache.clear();
         self.dynamics = Dynamics::new(&self.sys, &self.mode);
+        self.take_reference();
         self.resolve_mode(0);
+        self.take_reference();
         self.peak_u0 = self.u[0].abs();
         self.peak_slip = [0.0; MAX_BODIES];
         for j in 1..=n {
@@ -190,15 +203,28 @@ impl Simulator {
 
     /// Sets the support's mobility `m_b = d(floor acceleration) /
     /// d(floor force)` (1/kg; 1 / M_f for a floor of lumped mass M_f), used
-    /// by the mode resolutions of a prescribed support from now on (at
-    /// switches, at input jumps; between them the support follows `ag`
-    /// exactly). 0 (the default): a support that nothing the stack does
-    /// moves. Finite, from 0 to 1e9 (`supportMobility`); on a structure it
-    /// is kept but unused.
+    /// in the law of a prescribed support from now on: in a mode other than
+    /// the reference one (the mode when the inputs were last set) the
+    /// support moves at `g ag + c` ([`mode::support_law`]), in the mode
+    /// resolutions and between them. 0 (the default): a support that
+    /// nothing the stack does moves. Finite, from 0 to 1e9
+    /// (`supportMobility`); on a structure it is kept but unused.
     pub fn set_support_mobility(&mut self, mobility: f64) -> Result<(), ParamError> {
         check_scalar("supportMobility", mobility)?;
-        self.sys.mobility = mobility;
+        if mobility != self.sys.mobility {
+            self.sys.mobility = mobility;
+            if self.sys.prescribed() {
+                self.rebuild_dynamics();
+            }
+        }
         Ok(())
+    }
+
+    /// The reference mode's `(M_ref, s_ref)` of a prescribed support's law
+    /// ([`mode::support_law`]): the mass stuck to the support and the load
+    /// on it in the mode in force when the inputs were last set.
+    pub fn support_reference(&self) -> (f64, f64) {
+        (self.sys.ref_mass, self.sys.ref_load)
     }
 
     /// The support's mobility ([`Simulator::set_support_mobility`]).
@@ -296,7 +322,7 @@ impl Simulator {
             &self.sys,
             &self.mode,
             self.zero_mask(),
-            self.resolve_load0(),
+            self.load0(),
         ) <= mode::CONSISTENCY_TOL
     }
 
@@ -319,10 +345,16 @@ impl Simulator {
 
     /// [`Simulator::advance_pieces`] from a [`PieceSource`] (a record's
     /// samples promise the pieces that continue the previous one).
+    ///
+    /// On a prescribed support the mode at the call's start becomes the
+    /// reference of the support's law (the master computed the inputs with
+    /// it), after the support's drift is taken out ([`mode::support_law`]).
     pub fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
+        let mut law_changed = self.take_reference();
         let mut pending = pieces.next_piece();
         while let Some((t_end, exc)) = pending.take() {
-            let mut piece = self.begin_piece(t_end, &exc)?;
+            let mut piece = self.begin_piece(t_end, &exc, law_changed)?;
+            law_changed = false;
             match self.settings.method {
                 Method::EventLocated => loop {
                     // Substeps proved event-free on the exact map; the one
@@ -363,8 +395,18 @@ impl Simulator {
     }
 
     /// Checks a piece from the current time and acts on a jump of the
-    /// external force (it can break a stick; `ag` cannot).
-    fn begin_piece(&mut self, t_end: f64, exc: &Excitation) -> Result<Piece, SimError> {
+    /// external force (it can break a stick; `ag` cannot, but on a
+    /// prescribed support, where it is the support's acceleration and a
+    /// non-zero `Fext` is refused).
+    /// `law_changed`: the support's law changed at this instant
+    /// ([`Simulator::take_reference`]), which can move it at once as a jump
+    /// of `ag` does.
+    fn begin_piece(
+        &mut self,
+        t_end: f64,
+        exc: &Excitation,
+        law_changed: bool,
+    ) -> Result<Piece, SimError> {
         exc.check(self.t, t_end)?;
         let prescribed = self.sys.prescribed();
         if prescribed && (exc.fext != 0.0 || exc.fext_rate != 0.0) {
@@ -378,7 +420,7 @@ impl Simulator {
         // On a prescribed support a jump of `ag` moves the support's cluster
         // at once, as a jump of `Fext` a structure's.
         if pieces::is_jump(exc.fext, self.fext_now)
-            || (prescribed && pieces::is_jump(exc.ag, self.ag_now))
+            || (prescribed && (law_changed || pieces::is_jump(exc.ag, self.ag_now)))
         {
             // The guards that the jump violates fire as at any event.
             self.fire_violated(exc, self.t, self.all_interfaces(), 0);
@@ -443,17 +485,55 @@ impl Simulator {
         Dynamics::load0(&self.sys, self.u[0], self.v[0], self.ag_now, self.fext_now)
     }
 
-    /// The load a mode resolution takes now ([`ResolveRequest::load0`]): the
-    /// structure's load; on a prescribed support `ag - m_b F_old`, with
-    /// `F_old` the force the stack puts on it in the current mode.
-    fn resolve_load0(&self) -> f64 {
-        let load0 = self.load0();
-        if self.sys.prescribed() {
-            let floor_force = self.dynamics.floor_force(&self.mode, load0);
-            load0 - self.sys.mobility * floor_force
-        } else {
-            load0
+    /// On a prescribed support, makes the current mode the reference of
+    /// the support's law ([`mode::support_law`]): the mode in force when the
+    /// master sets the inputs. The support's drift from the input frame
+    /// (`u0`, `v0`, non-zero only after a switch with a mobility) is taken
+    /// out of every body first: the master's floor is where the support is
+    /// at a communication point; the slips and relative velocities are
+    /// kept, and the change of the stack's kinetic energy relative to the
+    /// frame is booked as input work (the balance stays closed). The
+    /// dynamics are rebuilt where the reference or the mobility changes
+    /// them.
+    ///
+    /// Returns whether the support's law changed: its acceleration can
+    /// then jump at once, as at a jump of `ag` (the caller fires the guards
+    /// it violates).
+    fn take_reference(&mut self) -> bool {
+        if !self.sys.prescribed() {
+            return false;
         }
+        let n = self.sys.n;
+        let (u0, v0) = (self.u[0], self.v[0]);
+        if u0 != 0.0 || v0 != 0.0 {
+            let mut kinetic_change = 0.0;
+            for i in 0..=n {
+                let v = self.v[i] - v0;
+                kinetic_change += 0.5 * self.sys.mass[i] * (v * v - self.v[i] * self.v[i]);
+                self.u[i] -= u0;
+                self.v[i] = v;
+            }
+            // Exactly 0 at the support, whatever rounding did above.
+            (self.u[0], self.v[0]) = (0.0, 0.0);
+            self.e_input += kinetic_change;
+        }
+        let d = &self.dynamics;
+        let reference = (d.mass[0], d.slip_load[0]);
+        if reference != (self.sys.ref_mass, self.sys.ref_load) {
+            (self.sys.ref_mass, self.sys.ref_load) = reference;
+            if self.sys.mobility != 0.0 {
+                self.rebuild_dynamics();
+                return true;
+            }
+        }
+        false
+    }
+
+    /// The dynamics of the current mode anew, and the cache emptied (after
+    /// a change of what a prescribed support's law depends on).
+    fn rebuild_dynamics(&mut self) {
+        self.dyn_cache.clear();
+        self.dynamics = Dynamics::new(&self.sys, &self.mode);
     }
 
     fn structure_accel(&self) -> f64 {

@@ -12,10 +12,10 @@
 //! acceleration, so stick/slip decisions never depend on `ag`.
 //!
 //! On a prescribed support (`Support::Prescribed`) body 0 is the support:
-//! its cluster's absolute acceleration is the input `ag` itself
-//! ([`Dynamics::accel0`], [`Dynamics::input_accel`]), and `ag` then enters
-//! the stick/slip decisions. When a mode is resolved there, the cluster's
-//! acceleration follows the support's mobility ([`cluster_law`]).
+//! its cluster's absolute acceleration is `g ag + c`, the input `ag` itself
+//! in the reference mode or without mobility ([`support_law`],
+//! [`Dynamics::accel0`], [`Dynamics::input_accel`]), and `ag` then enters
+//! the stick/slip decisions.
 
 use crate::physics::params::MAX_BODIES;
 use crate::physics::system::System;
@@ -155,10 +155,23 @@ pub struct Dynamics {
     /// force moves it: it moves with `ag`).
     pub inv_mass0: f64,
     /// `ag`'s share of the structure cluster's absolute acceleration: 0 on
-    /// a structure (forces move it), 1 on a prescribed support (it moves
-    /// with `ag`). With `inv_mass0`, the one rule of every integrator
-    /// ([`Dynamics::input_accel`]).
+    /// a structure (forces move it), the gain `g` of [`support_law`] on a
+    /// prescribed support (1 in the reference mode). With `inv_mass0`, the
+    /// one rule of every integrator ([`Dynamics::input_accel`]).
     pub ag_gain: f64,
+    /// The constant part of the structure cluster's absolute acceleration,
+    /// the one place every integrator reads it: `slip_load[0] / M0` on a
+    /// structure (as `slip_load[0] * inv_mass0`), the constant `c` of
+    /// [`support_law`] on a prescribed support (0 in the reference mode).
+    pub load_accel0: f64,
+    /// On a prescribed support, the force on the support's cluster that its
+    /// drift from the input frame works against, beyond the input `-M' ag`:
+    /// `M' (a0 - ag) - s' - M' (g - 1) ag = M' c - s'` (N), so that the
+    /// support's work on the stack over a displacement `Δu0` of the support
+    /// relative to the input frame is `support_force Δu0` (0 on a structure).
+    pub support_force: f64,
+    /// Whether body 0 is a prescribed support.
+    pub prescribed: bool,
     /// Interfaces (bit j) whose guard can change sign within the mode:
     /// slipping ones, and stuck ones in the structure's cluster. A stick
     /// higher up carries a constant force; a free interface has no guard.
@@ -242,6 +255,9 @@ impl Dynamics {
             accel_const: [0.0; MAX_BODIES],
             inv_mass0: 0.0,
             ag_gain: 0.0,
+            load_accel0: 0.0,
+            support_force: 0.0,
+            prescribed: sys.prescribed(),
             changing_guards: 0,
             guards: [Guard::Slip {
                 hi: 0,
@@ -276,11 +292,21 @@ impl Dynamics {
             d.accel_const[c] = d.slip_load[c] / d.mass[c];
         }
         if sys.prescribed() {
-            // The support's cluster (possibly of no mass) moves with `ag`.
-            (d.inv_mass0, d.ag_gain) = (0.0, 1.0);
+            // The support's cluster (possibly of no mass) moves at `g ag +
+            // c`: `ag` itself in the reference mode (g = 1, c = 0).
+            let (gain, c) = support_law(sys, d.mass[0], d.slip_load[0]);
+            (d.inv_mass0, d.ag_gain) = (0.0, gain);
+            // (c = 0: the value before the law, a zero of either sign.)
+            d.load_accel0 = if c != 0.0 {
+                c
+            } else {
+                d.slip_load[0] * d.inv_mass0
+            };
+            d.support_force = d.mass[0] * c - d.slip_load[0];
         } else {
             d.accel_const[0] = d.slip_load[0] / d.mass[0];
             d.inv_mass0 = 1.0 / d.mass[0];
+            d.load_accel0 = d.slip_load[0] * d.inv_mass0;
         }
         for c in 0..d.n_clusters {
             let mut above = 0.0;
@@ -300,8 +326,8 @@ impl Dynamics {
 
     /// The structure cluster's load as [`Dynamics::accel0`] takes it (the
     /// `load0` of every method here): on a structure the force of the
-    /// spring, the damper and `fext` (N); on a prescribed support the
-    /// support's absolute acceleration `ag` (m/s2).
+    /// spring, the damper and `fext` (N); on a prescribed support the input
+    /// `ag` (m/s2), the support's acceleration in the reference mode.
     #[inline]
     pub fn load0(sys: &System, u0: f64, v0: f64, ag: f64, fext: f64) -> f64 {
         if sys.prescribed() {
@@ -312,11 +338,12 @@ impl Dynamics {
     }
 
     /// The part of the structure cluster's absolute acceleration that the
-    /// inputs make: `fext / M0` on a structure, `ag` on a prescribed
-    /// support. Its acceleration is this plus `(slip load - k u0 - c v0) /
-    /// M0` (all zero on a prescribed support): the rule the integrators
-    /// use, written here once (their forcing relative to the support is
-    /// this minus `ag`, exactly 0 on a prescribed support).
+    /// inputs make: `fext / M0` on a structure, `g ag` on a prescribed
+    /// support. Its acceleration is this plus `load_accel0 - (k u0 + c v0)
+    /// / M0` (`k = c = 0` on a prescribed support): the rule the
+    /// integrators use, written here once (their forcing relative to the
+    /// input frame is this minus `ag` plus `load_accel0`, exactly 0 on a
+    /// prescribed support in its reference mode).
     #[inline(always)]
     pub fn input_accel(&self, ag: f64, fext: f64) -> f64 {
         fext * self.inv_mass0 + ag * self.ag_gain
@@ -333,12 +360,12 @@ impl Dynamics {
     }
 
     /// Absolute acceleration of the structure's cluster: `(slip load +
-    /// load0) / M0` on a structure, `load0` (= `ag`) on a prescribed
-    /// support ([`Dynamics::load0`]).
+    /// load0) / M0` on a structure, `g ag + c` on a prescribed support
+    /// (`load0 = ag`, [`Dynamics::load0`]; [`support_law`]).
     #[inline]
     pub fn accel0(&self, load0: f64) -> f64 {
-        if self.ag_gain != 0.0 {
-            load0
+        if self.prescribed {
+            support_accel(self.ag_gain, self.load_accel0, load0)
         } else {
             (self.slip_load[0] + load0) * self.inv_mass0
         }
@@ -405,6 +432,42 @@ impl Dynamics {
     /// Relative absolute acceleration of interface j (body j minus body j-1).
     pub fn rel_accel(&self, j: usize, load0: f64) -> f64 {
         self.accel(self.cluster_of[j], load0) - self.accel(self.cluster_of[j - 1], load0)
+    }
+}
+
+/// The law of a prescribed support's cluster in a mode whose cluster on the
+/// support has mass `mass` (`M'`, the blocks stuck to it) and constant load
+/// `load` (`s'`, from the first slipping interface above it): its absolute
+/// acceleration is `g ag + c` ([`support_accel`]) with
+///
+/// `g = (1 + m_b M_ref) / (1 + m_b M')`, `c = m_b (s' - s_ref) / (1 + m_b M')`,
+///
+/// `m_b` the support's mobility and `(M_ref, s_ref)` those of the reference
+/// mode ([`System::ref_mass`]). The master's input `ag` is its floor's
+/// acceleration under the stack's force of the reference mode, `F_ref = -M_ref
+/// ag + s_ref`; the rest of its model pushes the floor (mass `1 / m_b`) with
+/// `P = ag / m_b - F_ref`, and in a mode with `(M', s')` the floor carrying
+/// the stack moves at `(P + s') m_b / (1 + m_b M')`: the expression above,
+/// linear in `ag`, holding continuously until the inputs are next set. In
+/// the reference mode, or with `m_b = 0`, `g = 1` and `c = 0` exactly. The
+/// one rule of the resolver ([`cluster_law`]) and of every integrator
+/// (through [`Dynamics`]). (docs/model-and-numerics.md, "A stack on a
+/// prescribed support".)
+#[inline]
+pub fn support_law(sys: &System, mass: f64, load: f64) -> (f64, f64) {
+    let mb = sys.mobility;
+    let den = 1.0 + mb * mass;
+    ((1.0 + mb * sys.ref_mass) / den, mb * (load - sys.ref_load) / den)
+}
+
+/// `g ag + c` ([`support_law`]): `ag` itself, bit for bit, when `g = 1`
+/// and `c = 0`.
+#[inline(always)]
+pub fn support_accel(gain: f64, c: f64, ag: f64) -> f64 {
+    if gain == 1.0 && c == 0.0 {
+        ag
+    } else {
+        gain * ag + c
     }
 }
 
@@ -481,14 +544,8 @@ fn free_mask(sys: &System) -> u32 {
 /// operation (the masses are `System`'s tables of the same sums).
 ///
 /// On a prescribed support the cluster on it (blocks of mass `M'`, load `s'`
-/// from the interface above) moves at `(ag + m_b (s' - F_old)) / (1 + m_b
-/// M')`, with `m_b` the support's mobility ([`System::mobility`]) and
-/// `load0 = ag - m_b F_old` ([`ResolveRequest::load0`]; `F_old` the force the
-/// stack put on the support in the mode before): the acceleration of a
-/// floor of mass `1 / m_b` carrying the stack, pushed by the rest of its
-/// model with the force that gave it `ag` under `F_old`. With `m_b = 0` it
-/// is `ag` exactly. (docs/model-and-numerics.md, "A stack on a prescribed
-/// support".)
+/// from the interface above) moves by [`support_law`] (`load0 = ag`), as
+/// the integrators move it afterwards.
 #[inline]
 fn cluster_law(
     sys: &System,
@@ -510,8 +567,8 @@ fn cluster_law(
     }
     let accel = if bottom == 0 {
         if sys.prescribed() {
-            let mb = sys.mobility;
-            (mb * load + load0) / (1.0 + mb * mass)
+            let (gain, c) = support_law(sys, mass, load);
+            support_accel(gain, c, load0)
         } else {
             (load + load0) * (1.0 / mass)
         }
@@ -560,9 +617,7 @@ pub struct ResolveRequest {
     /// Interfaces that were stuck before this instant (preferred to stay so).
     pub was_stuck: u32,
     /// Structure load (spring, damper, external force) at this instant; on a
-    /// prescribed support `ag - m_b F_old`, with `m_b` its mobility and
-    /// `F_old` the force the stack puts on it in the current mode (see
-    /// [`cluster_law`]; just `ag` when `m_b = 0`).
+    /// prescribed support the input `ag` ([`Dynamics::load0`]).
     pub load0: f64,
 }
 

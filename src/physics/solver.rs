@@ -200,6 +200,16 @@ impl Solver {
         }
     }
 
+    /// Sets the support's mobility ([`Simulator::set_support_mobility`]):
+    /// checked for every solver, used by the exact ones (the regularized
+    /// baseline has no prescribed support).
+    pub fn set_support_mobility(&mut self, mobility: f64) -> Result<(), ParamError> {
+        match self {
+            Solver::Exact(s) => s.set_support_mobility(mobility),
+            Solver::Regularized(_) => check_scalar("supportMobility", mobility),
+        }
+    }
+
     /// The external force now, as the last call left it (N).
     pub fn fext_now(&self) -> f64 {
         match self {

@@ -9,9 +9,10 @@ use std::f64::consts::PI;
 /// between body j-1 and body j.
 ///
 /// On a prescribed support ([`Support::Prescribed`]) body 0 is the support,
-/// pinned to the input `ag`: `k = c = 0`, `mass[0] = 0` (the support's own
-/// mass is its model's business; [`System::mobility`] stands for it when a
-/// mode is resolved) and `omega_p = 0` (no spring: the substeps do not
+/// whose absolute acceleration follows the input `ag`: `k = c = 0`,
+/// `mass[0] = 0` (the support's own mass is its model's business;
+/// [`System::mobility`] stands for it, see
+/// [`crate::physics::mode::support_law`]) and `omega_p = 0` (no spring: the substeps do not
 /// follow from it, see `Simulator::map_step`).
 #[derive(Clone, Debug)]
 pub struct System {
@@ -37,10 +38,18 @@ pub struct System {
     /// What block 1 rests on.
     pub support: Support,
     /// The support's mobility `d(floor acceleration) / d(floor force)`
-    /// (1/kg), used only when a mode is resolved on a prescribed support
-    /// (`mode::cluster_law`); 0 unless `Simulator::set_support_mobility`
-    /// set it.
+    /// (1/kg) of a prescribed support, in its law of motion
+    /// ([`crate::physics::mode::support_law`]); 0 unless
+    /// `Simulator::set_support_mobility` set it.
     pub mobility: f64,
+    /// The reference mode of a prescribed support's law: the mass of its
+    /// cluster on the support (`M_ref`, kg; the blocks stuck to it) and the
+    /// constant load on that cluster (`s_ref`, N) in the mode in force when
+    /// the master last set the inputs ([`crate::physics::mode::support_law`]).
+    /// Set by the simulator; 0 until then.
+    pub ref_mass: f64,
+    /// See [`System::ref_mass`].
+    pub ref_load: f64,
     /// `[a][e]`: mass of bodies a..e summed upwards from 0, in the order
     /// [`crate::physics::mode::Dynamics::clusters`] adds a cluster's mass.
     pub mass_up: [[f64; MAX_BODIES + 1]; MAX_BODIES],
@@ -106,6 +115,8 @@ impl System {
             omega_p,
             support: p.support,
             mobility: 0.0,
+            ref_mass: 0.0,
+            ref_load: 0.0,
         })
     }
 

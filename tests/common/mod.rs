@@ -121,6 +121,9 @@ pub struct Exact {
     k: f64,
     c: f64,
     normal: Vec<f64>,
+    /// On a prescribed support with a mobility: the reference mode, the
+    /// mode when the inputs were last set (at every piece's start).
+    ref_mode: std::cell::Cell<Mode>,
 }
 
 impl Exact {
@@ -154,8 +157,10 @@ impl Exact {
         } else {
             (k, 2.0 * p.zeta * (k * p.mp).sqrt())
         };
+        let sys = System::new(p).unwrap();
         Exact {
-            sys: System::new(p).unwrap(),
+            ref_mode: std::cell::Cell::new(Mode::all_stuck(&sys)),
+            sys,
             m,
             mass,
             inv_mass,
@@ -166,9 +171,14 @@ impl Exact {
         }
     }
 
-    /// The same reference with the support's mobility `m_b` for the mode
-    /// resolutions of a prescribed support (the engine's
-    /// `Simulator::set_support_mobility`).
+    /// The same reference with the support's mobility `m_b` of a
+    /// prescribed support (the engine's `Simulator::set_support_mobility`):
+    /// its own derivation of the law. The support is a floor of mass `M_f =
+    /// 1 / m_b` that the rest of the master's model pushes with `P = M_f ag
+    /// - F_ref(ag)`, where `F_ref(ag)` is the force the stack puts on a
+    /// support moving at `ag` in the reference mode (the force the master
+    /// took for its floor's acceleration `ag`): the Delassus system with
+    /// body 0 of mass `M_f` under `P`.
     pub fn with_mobility(mut self, mobility: f64) -> Exact {
         self.sys.mobility = mobility;
         self
@@ -192,7 +202,8 @@ impl Exact {
     }
 
     /// As [`Exact::chain_with_force`] with the support's acceleration `ag`,
-    /// which moves body 0 of a prescribed support (and nothing else).
+    /// which moves body 0 of a prescribed support (and nothing else); with
+    /// a mobility, body 0 is the floor of [`Exact::with_mobility`].
     pub fn chain_full(
         &self,
         mode: &Mode,
@@ -201,8 +212,41 @@ impl Exact {
         fext: f64,
         ag: f64,
     ) -> (DVector<f64>, DVector<f64>) {
-        let n = self.m - 1;
+        if self.prescribed && self.sys.mobility != 0.0 {
+            let mf = 1.0 / self.sys.mobility;
+            let f_ref = self.floor_force_pinned(&self.ref_mode.get(), ag);
+            let p = mf * ag - f_ref;
+            return self.chain_core(mode, p, mf.recip(), mf, None);
+        }
+        if self.prescribed {
+            return self.chain_core(mode, 0.0, 0.0, 0.0, Some(ag));
+        }
         let s0 = -self.k * u0 - self.c * v0 + fext;
+        self.chain_core(mode, s0, self.inv_mass[0], self.mass[0], None)
+    }
+
+    /// The force the stack puts on a support moving at `ag` in `mode` (`-F_1`).
+    pub fn floor_force_pinned(&self, mode: &Mode, ag: f64) -> f64 {
+        if self.m == 1 {
+            return 0.0;
+        }
+        let (_, f) = self.chain_core(mode, 0.0, 0.0, 0.0, Some(ag));
+        -f[0]
+    }
+
+    /// The Delassus system with body 0 under the force `s0` (mass `mass0`,
+    /// inverse `inv0`), or pinned at the acceleration `pinned`.
+    fn chain_core(
+        &self,
+        mode: &Mode,
+        s0: f64,
+        inv0: f64,
+        mass0: f64,
+        pinned: Option<f64>,
+    ) -> (DVector<f64>, DVector<f64>) {
+        let n = self.m - 1;
+        let mut inv = self.inv_mass.clone();
+        inv[0] = inv0;
         let mut f = DVector::zeros(n);
         let stuck: Vec<usize> = (1..=n).filter(|&j| mode.is_stuck(j)).collect();
         for j in 1..=n {
@@ -212,7 +256,6 @@ impl Exact {
         }
         if !stuck.is_empty() {
             // r = W f + b, relative accelerations of the interfaces.
-            let inv = &self.inv_mass;
             let w = |a: usize, b: usize| -> f64 {
                 if a == b {
                     inv[a - 1] + inv[a]
@@ -228,9 +271,9 @@ impl Exact {
             let wss = DMatrix::from_fn(ns, ns, |r, q| w(stuck[r], stuck[q]));
             let rhs = DVector::from_fn(ns, |r, _| {
                 let j = stuck[r];
-                let b = match (j, self.prescribed) {
-                    (1, true) => -ag,
-                    (1, false) => -s0 / self.mass[0],
+                let b = match (j, pinned) {
+                    (1, Some(ag)) => -ag,
+                    (1, None) => -s0 / mass0,
                     _ => 0.0,
                 };
                 let wl: f64 = (1..=n)
@@ -245,12 +288,14 @@ impl Exact {
             }
         }
         let a = DVector::from_fn(self.m, |i, _| {
-            if i == 0 && self.prescribed {
-                return ag;
+            if i == 0 {
+                if let Some(ag) = pinned {
+                    return ag;
+                }
             }
             let below = if i == 0 { s0 } else { f[i - 1] };
             let above = if i < n { f[i] } else { 0.0 };
-            (below - above) / self.mass[i]
+            (below - above) / if i == 0 { mass0 } else { self.mass[i] }
         });
         (a, f)
     }
@@ -341,8 +386,35 @@ impl Exact {
             // This piece runs from t_a (the previous one's end) to its end.
             let len = piece.t_end - t_a;
             let (a_a, slope) = (piece.ag, piece.ag_rate);
+            // A piece is a communication step: on a prescribed support its
+            // start's mode is the reference of the support's law, after the
+            // support's drift from the input frame (non-zero only with a
+            // mobility) is taken out of every body, slips and relative
+            // velocities kept, the change of kinetic energy (relative to
+            // the frame) booked as input work.
+            // A change of the law can move the support at once, as a jump
+            // of ag does: an event too.
+            let mut law_changed = false;
+            if self.prescribed {
+                let (u0, v0) = (z[0], z[m]);
+                for i in 0..m {
+                    let v = z[m + i] - v0;
+                    if i > 0 {
+                        res.e_input += 0.5 * self.mass[i] * (v * v - z[m + i] * z[m + i]);
+                    }
+                    z[i] -= u0;
+                    z[m + i] = v;
+                }
+                (z[0], z[m]) = (0.0, 0.0);
+                if self.ref_mode.get() != mode {
+                    self.ref_mode.set(mode);
+                    cache = None;
+                    law_changed = self.sys.mobility != 0.0;
+                }
+            }
             // On a prescribed support a jump of ag is an event too.
-            let ag_jump = self.prescribed
+            let ag_jump = law_changed
+                || self.prescribed
                 && (piece.ag - z[2 * m + 1]).abs() > 1e-12 * piece.ag.abs().max(z[2 * m + 1].abs());
             z[2 * m + 1] = a_a;
             z[2 * m + 2] = slope;
@@ -522,9 +594,9 @@ impl Exact {
             if j - start > 1 {
                 let mm: f64 = (start..j).map(|i| self.mass[i]).sum();
                 let p: f64 = (start..j).map(|i| self.mass[i] * z[m + i]).sum();
-                // A prescribed support keeps its velocity, 0.
+                // A prescribed support keeps its velocity.
                 let v = if start == 0 && self.prescribed {
-                    0.0
+                    z[m]
                 } else {
                     p / mm
                 };
@@ -542,12 +614,19 @@ impl Exact {
         let was_stuck = (1..=n)
             .filter(|&j| mode.is_stuck(j))
             .fold(0, |a, j| a | (1 << j));
+        // The resolver's selection rule (the engine's), its law of a
+        // prescribed support told the reference mode's mass and load as the
+        // reference finds them: the blocks stuck to the support, and the
+        // force on them from above, F_ref(0).
+        let mut sys = self.sys.clone();
         let load0 = if self.prescribed {
-            // The support's acceleration less its mobility times the force
-            // the stack puts on it in the mode before (`-F_1`).
-            let ag = z[2 * m + 1];
-            let (_, f) = self.chain_full(mode, 0.0, 0.0, 0.0, ag);
-            ag - self.sys.mobility * -f[0]
+            let r = self.ref_mode.get();
+            sys.ref_mass = (1..m)
+                .take_while(|&j| r.is_stuck(j))
+                .map(|j| self.mass[j])
+                .sum();
+            sys.ref_load = self.floor_force_pinned(&r, 0.0);
+            z[2 * m + 1]
         } else {
             -self.k * z[0] - self.c * z[m] + z[2 * m + 3]
         };
@@ -558,7 +637,27 @@ impl Exact {
             was_stuck,
             load0,
         };
-        *mode = mode::resolve(&self.sys, &req).mode;
+        let res = mode::resolve(&sys, &req);
+        *mode = res.mode;
+        if res.consistent {
+            // Checked against the reference's own law: every interface of
+            // `zero` stuck within mus N, or slipping the way its relative
+            // acceleration goes.
+            let (a, f) = self.chain_full(mode, z[0], z[m], z[2 * m + 3], z[2 * m + 1]);
+            for j in 1..=n {
+                if zero & (1 << j) == 0 {
+                    continue;
+                }
+                let ok = match mode.contact[j] {
+                    Contact::Stuck => {
+                        f[j - 1].abs() <= self.sys.mus[j] * self.normal[j] * (1.0 + 1e-8)
+                    }
+                    Contact::Free => true,
+                    c => c.slip_sign() * (a[j] - a[j - 1]) >= -1e-8 * self.sys.g,
+                };
+                assert!(ok, "the resolved mode {mode:?} breaks the reference's law at {j}");
+            }
+        }
     }
 
     /// Input and friction work over a stretch of length `delta` from `a` to
@@ -591,6 +690,20 @@ impl Exact {
             let integral = g0 * (c0 * d + c1 * d * d / 2.0 + c2 * d.powi(3) / 3.0)
                 + g1 * (c0 * d * d / 2.0 + c1 * d.powi(3) / 3.0 + c2 * d.powi(4) / 4.0);
             work -= self.mass[i] * integral;
+        }
+        if m > 1 && self.sys.mobility != 0.0 {
+            // The support's drift from the input frame: the force F_1 of
+            // the support on block 1 (affine in ag, so linear in time) over
+            // the support's velocity relative to the frame, ∫ F_1 v0.
+            let f1 = |z: &DVector<f64>| {
+                self.chain_full(mode, z[0], z[m], z[2 * m + 3], z[2 * m + 1]).1[0]
+            };
+            let (fa, fb) = (f1(a), f1(b));
+            let d = delta;
+            let (c0, c1, c2) = (a[m], z1[m], 0.5 * z2[m]);
+            let (f0, f1r) = (fa, (fb - fa) / d);
+            work += f0 * (c0 * d + c1 * d * d / 2.0 + c2 * d.powi(3) / 3.0)
+                + f1r * (c0 * d * d / 2.0 + c1 * d.powi(3) / 3.0 + c2 * d.powi(4) / 4.0);
         }
         res.e_input += work;
         for j in 1..m {

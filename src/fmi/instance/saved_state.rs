@@ -11,7 +11,7 @@ use crate::physics::snapshot::{ByteReader, ByteWriter};
 const STATE_MAGIC: &[u8; 8] = b"SLLSTATE";
 /// 4: the count of steps (the time tolerance), and every field checked.
 /// 5: the engine's support (structure or prescribed) and support mobility.
-const STATE_VERSION: u32 = 5;
+const STATE_VERSION: u32 = 6;
 use crate::limits::{self, Num, MAX_PATH_BYTES, MAX_TIME};
 use crate::physics::params::{check_scalar, MAX_BLOCKS};
 use crate::physics::snapshot::SnapshotError;

@@ -34,7 +34,7 @@ impl Simulator {
             zero: self.zero_mask(),
             must_break,
             was_stuck: self.stuck_mask(),
-            load0: self.resolve_load0(),
+            load0: self.load0(),
         };
         let res = mode::resolve(&self.sys, &req);
         self.tries += u64::from(res.tries);
@@ -223,6 +223,12 @@ impl DynamicsCache {
             k |= (mode.contact[j] as u32) << (2 * j + 2);
         }
         k
+    }
+
+    /// Forgets every entry (their dynamics were built for another reference
+    /// mode or mobility of a prescribed support).
+    pub(super) fn clear(&mut self) {
+        *self = DynamicsCache::default();
     }
 
     /// Sets `out` to the dynamics of `mode`, built if missing.

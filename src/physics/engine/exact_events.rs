@@ -124,7 +124,7 @@ impl Flow {
         let (w2, cm) = (sys.k * inv_mass, sys.c * inv_mass);
         let (ag0, fext0) = exc.at(sim.t - t_ref);
         let q0 = d.input_accel(ag0, fext0) - ag0;
-        let p0 = d.slip_load[0] * inv_mass + q0;
+        let p0 = d.load_accel0 + q0;
         let p1 = d.input_accel(exc.ag_rate, exc.fext_rate) - exc.ag_rate;
         taylor_uv(
             [sim.u[0], sim.v[0], p0, p1],
@@ -535,6 +535,12 @@ impl Simulator {
         }
         move_bodies(&mut self.u, &mut self.v, d, n, u0, &du, &v_end);
         self.e_input += input + upper_work;
+        // A prescribed support's drift from the input frame: its work on
+        // the stack beyond the input (Dynamics::support_force).
+        let support_work = d.support_force * (u0 - u0_start);
+        if support_work != 0.0 {
+            self.e_input += support_work;
+        }
         self.e_viscous += viscous;
         self.peak_u0 = peak_u0;
         self.peak_a0 = peak_a0;

@@ -178,8 +178,13 @@ impl ExactMap {
                 *x *= scale;
             }
         }
+        // Every term of a structure's bound of v''' is positive. On a
+        // prescribed support (w2 = cm = 0) they are all 0, and so is every
+        // start vector z (no motion, no forcing): the ratios are then 0, not
+        // 0/0 or x/0.
         let over_three = |m: usize| {
             (0..4)
+                .filter(|&i| bound[2][i] > 0.0)
                 .map(|i| bound[m - 1][i] / bound[2][i])
                 .fold(0.0, f64::max)
         };
@@ -376,6 +381,38 @@ mod tests {
                 assert!(worst[0] <= map.one_over_three * map.sup_v(3, &z));
             }
         }
+    }
+
+    #[test]
+    fn the_map_of_a_prescribed_support_is_free_motion_with_no_nan() {
+        // Expected: w2 = cm = 0 and a cluster of no mass (the support with
+        // every block slipping): the exact rows of u'' = p + p' t, u =
+        // [1, h, h²/2, h³/6] and v = [0, 1, h, h²/2] (to rounding), every
+        // field finite, the ratios of the bounds 0.
+        let p = Params {
+            n_blocks: 2,
+            mp: 1.0,
+            support: crate::physics::params::Support::Prescribed,
+            ..Params::default()
+        };
+        let sys = System::new(&p).unwrap();
+        let h = canonical_length(0.02);
+        let map = ExactMap::new(&sys, 0.0, h);
+        let u = [1.0, h, h * h / 2.0, h * h * h / 6.0];
+        let v = [0.0, 1.0, h, h * h / 2.0];
+        for k in 0..4 {
+            assert!((map.u[k] - u[k]).abs() <= 4e-16 * u[k].abs(), "u[{k}]");
+            assert!((map.v[k] - v[k]).abs() <= 4e-16 * v[k].abs(), "v[{k}]");
+        }
+        let all = map
+            .int_u
+            .iter()
+            .chain(&map.quad)
+            .chain(map.bound.iter().flatten());
+        assert!(all.copied().all(f64::is_finite));
+        assert_eq!((map.w2, map.cm, map.c), (0.0, 0.0, 0.0));
+        assert_eq!((map.one_over_three, map.five_over_three), (0.0, 0.0));
+        assert_eq!(map.sup_v(3, &[0.0; 4]), 0.0);
     }
 
     #[test]

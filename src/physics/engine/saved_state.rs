@@ -32,6 +32,7 @@ impl Simulator {
             w.u64(x);
         }
         w.f64(self.sys.mobility);
+        w.f64s(&[self.sys.ref_mass, self.sys.ref_load]);
     }
 
     /// Reads a state written by [`Simulator::write_state`].
@@ -79,6 +80,13 @@ impl Simulator {
         let mobility = r.f64()?;
         sim.set_support_mobility(mobility)
             .map_err(|e| format!("in the saved state: {e}"))?;
+        let mut reference = [0.0; 2];
+        r.f64s(&mut reference)?;
+        if !reference.iter().all(|x| x.is_finite()) {
+            return Err("the saved state's reference mode is not finite".into());
+        }
+        [sim.sys.ref_mass, sim.sys.ref_load] = reference;
+        sim.rebuild_dynamics();
         sim.check_restored()?;
         Ok(sim)
     }

@@ -17,6 +17,10 @@ pub(super) struct StructureRk4 {
     pub(super) inv_mass0: f64,
     pub(super) ag_gain: f64,
     pub(super) slip_load0: f64,
+    /// A prescribed support's constant acceleration `c` and its flag
+    /// ([`Dynamics::load_accel0`]).
+    pub(super) load_accel0: f64,
+    pub(super) prescribed: bool,
     pub(super) exc: Excitation,
     pub(super) t_ref: f64,
 }
@@ -30,6 +34,8 @@ impl StructureRk4 {
             inv_mass0: d.inv_mass0,
             ag_gain: d.ag_gain,
             slip_load0: d.slip_load[0],
+            load_accel0: d.load_accel0,
+            prescribed: d.prescribed,
             exc: *exc,
             t_ref,
         }
@@ -42,10 +48,13 @@ impl StructureRk4 {
     }
 
     /// Absolute acceleration of the structure's cluster at a state (the
-    /// rule of [`Dynamics::input_accel`]: `ag` itself on a prescribed
-    /// support, where every other term is 0).
+    /// rule of [`Dynamics::input_accel`] and [`Dynamics::accel0`]: `g ag +
+    /// c` on a prescribed support, where every other term is 0).
     #[inline]
     pub(super) fn accel(&self, ag: f64, fext: f64, u0: f64, v0: f64) -> f64 {
+        if self.prescribed {
+            return mode::support_accel(self.ag_gain, self.load_accel0, ag);
+        }
         (self.slip_load0 + fext - self.k * u0 - self.c * v0) * self.inv_mass0 + ag * self.ag_gain
     }
 
@@ -64,7 +73,14 @@ impl StructureRk4 {
     pub(super) fn rates(&self, t: f64, u0: f64, v0: f64) -> Structure {
         let (ag, fext) = self.inputs(t);
         let a = self.accel(ag, fext, u0, v0) - ag;
-        [v0, a, (fext - ag * self.mass0) * v0, self.c * v0 * v0]
+        // On a prescribed support the work on its cluster beyond friction:
+        // the input and the support's drift, (M' (a0 - ag) - s') v0.
+        let input = if self.prescribed {
+            (self.mass0 * a - self.slip_load0) * v0
+        } else {
+            (fext - ag * self.mass0) * v0
+        };
+        [v0, a, input, self.c * v0 * v0]
     }
 
     /// One RK4 step of length `tau` from (u, v) at `t0`; the work terms are

@@ -154,7 +154,8 @@ impl Simulator {
             }
         });
         let (mass, inv_mass) = (d.mass[0], d.inv_mass0);
-        let load_accel = d.slip_load[0] * inv_mass;
+        let load_accel = d.load_accel0;
+        debug_assert!(d.prescribed || load_accel.to_bits() == (d.slip_load[0] * inv_mass).to_bits());
         let prescribed = sys.prescribed();
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
         // The piece in locals (written back at the end): the loop reads
@@ -168,6 +169,7 @@ impl Simulator {
 
         // The run's state.
         let mut u0 = self.u[0];
+        let u0_start = u0;
         let mut vel: [f64; NC] = std::array::from_fn(|c| self.v[d.bottom[c]]);
         let vel_start = vel;
         let mut slip: [f64; NC] = std::array::from_fn(|m| {
@@ -373,6 +375,12 @@ impl Simulator {
                     - m * accel_c[c] * shift[c];
             }
             self.e_input += work[0] + upper;
+            // A prescribed support's drift from the input frame: its work
+            // on the stack beyond the input (Dynamics::support_force).
+            let support_work = d.support_force * (u0 - u0_start);
+            if support_work != 0.0 {
+                self.e_input += support_work;
+            }
             self.e_viscous += work[1];
             let (mut shift_all, mut vel_all) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
             shift_all[..NC].copy_from_slice(&shift);
