@@ -318,12 +318,8 @@ impl Simulator {
 
     /// Whether the current mode satisfies the contact law (within tolerance).
     pub fn mode_is_consistent(&self) -> bool {
-        mode::violation(
-            &self.sys,
-            &self.mode,
-            self.zero_mask(),
-            self.load0(),
-        ) <= mode::CONSISTENCY_TOL
+        mode::violation(&self.sys, &self.mode, self.zero_mask(), self.load0())
+            <= mode::CONSISTENCY_TOL
     }
 
     /// Advances to `t_end` under an excitation that is linear over
@@ -377,6 +373,10 @@ impl Simulator {
                 }
             }
             self.end_piece(&piece);
+            let exact = self.settings.method == Method::EventLocated;
+            if exact && pending.is_none() && self.sys.prescribed() {
+                self.settle_at_end(&piece);
+            }
         }
         self.check_finite()
     }
@@ -423,7 +423,8 @@ impl Simulator {
             || (prescribed && (law_changed || pieces::is_jump(exc.ag, self.ag_now)))
         {
             // The guards that the jump violates fire as at any event.
-            self.fire_violated(exc, self.t, self.all_interfaces(), 0);
+            let candidates = self.violated_at_jump(exc);
+            self.fire_violated(exc, self.t, candidates, 0);
         }
         self.take_inputs_now(exc, self.t);
         Ok(Piece::new(self.t, t_end, exc, self.h_max))

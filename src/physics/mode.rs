@@ -457,7 +457,10 @@ impl Dynamics {
 pub fn support_law(sys: &System, mass: f64, load: f64) -> (f64, f64) {
     let mb = sys.mobility;
     let den = 1.0 + mb * mass;
-    ((1.0 + mb * sys.ref_mass) / den, mb * (load - sys.ref_load) / den)
+    (
+        (1.0 + mb * sys.ref_mass) / den,
+        mb * (load - sys.ref_load) / den,
+    )
 }
 
 /// `g ag + c` ([`support_law`]): `ag` itself, bit for bit, when `g = 1`

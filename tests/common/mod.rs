@@ -415,7 +415,8 @@ impl Exact {
             // On a prescribed support a jump of ag is an event too.
             let ag_jump = law_changed
                 || self.prescribed
-                && (piece.ag - z[2 * m + 1]).abs() > 1e-12 * piece.ag.abs().max(z[2 * m + 1].abs());
+                    && (piece.ag - z[2 * m + 1]).abs()
+                        > 1e-12 * piece.ag.abs().max(z[2 * m + 1].abs());
             z[2 * m + 1] = a_a;
             z[2 * m + 2] = slope;
             let jump = piece.fext - z[2 * m + 3];
@@ -576,8 +577,20 @@ impl Exact {
         let n = m - 1;
         let mut must_break = 0u32;
         let mut joined = vec![false; m];
+        // At a jump (`located` 0) on a prescribed support, a slip at zero
+        // relative velocity whose relative acceleration still goes its way
+        // goes on (it has just started; the engine's `violated_at_jump`).
+        let (a_now, _) = self.chain_full(mode, z[0], z[m], z[2 * m + 3], z[2 * m + 1]);
+        let goes_on = |j: usize| {
+            let c = mode.contact[j];
+            located == 0
+                && self.prescribed
+                && matches!(c, Contact::SlipForward | Contact::SlipBackward)
+                && z[m + j] == z[m + j - 1]
+                && c.slip_sign() * (a_now[j] - a_now[j - 1]) >= 0.0
+        };
         for j in 1..=n {
-            if j == located || self.guard(mode, z, j) <= 0.0 {
+            if j == located || (self.guard(mode, z, j) <= 0.0 && !goes_on(j)) {
                 match mode.contact[j] {
                     Contact::Stuck => must_break |= 1 << j,
                     Contact::Free => {}
@@ -655,7 +668,10 @@ impl Exact {
                     Contact::Free => true,
                     c => c.slip_sign() * (a[j] - a[j - 1]) >= -1e-8 * self.sys.g,
                 };
-                assert!(ok, "the resolved mode {mode:?} breaks the reference's law at {j}");
+                assert!(
+                    ok,
+                    "the resolved mode {mode:?} breaks the reference's law at {j}"
+                );
             }
         }
     }
@@ -696,7 +712,8 @@ impl Exact {
             // the support on block 1 (affine in ag, so linear in time) over
             // the support's velocity relative to the frame, ∫ F_1 v0.
             let f1 = |z: &DVector<f64>| {
-                self.chain_full(mode, z[0], z[m], z[2 * m + 3], z[2 * m + 1]).1[0]
+                self.chain_full(mode, z[0], z[m], z[2 * m + 3], z[2 * m + 1])
+                    .1[0]
             };
             let (fa, fb) = (f1(a), f1(b));
             let d = delta;

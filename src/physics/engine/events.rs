@@ -132,6 +132,74 @@ impl Simulator {
         g
     }
 
+    /// The guards that may fire at a jump of the inputs to `exc` now: all,
+    /// but on a prescribed support a slip at zero relative velocity (one
+    /// that has just started) whose relative acceleration under the new
+    /// inputs still goes its way: it is not a switch, and resolving it
+    /// anew would lose what started it (a stick at its limit, which the
+    /// rule "the most stuck interfaces" would take back). A co-simulation
+    /// that redoes its step up to a switch exchanges its values at that
+    /// very instant: the support's acceleration then jumps by the error of
+    /// the step's extrapolation, and the slip must go on.
+    pub(super) fn violated_at_jump(&mut self, exc: &Excitation) -> u32 {
+        let all = self.all_interfaces();
+        if !self.sys.prescribed() {
+            return all;
+        }
+        self.take_inputs_now(exc, self.t);
+        let load0 = self.load0();
+        let mut candidates = all;
+        for j in 1..=self.sys.n {
+            let c = self.mode.contact[j];
+            let starting = matches!(c, Contact::SlipForward | Contact::SlipBackward)
+                && self.v[j] == self.v[j - 1];
+            if starting && c.slip_sign() * self.dynamics.rel_accel(j, load0) >= 0.0 {
+                candidates &= !(1 << j);
+            }
+        }
+        candidates
+    }
+
+    /// At the end of a call on a prescribed support: a guard at zero up to
+    /// rounding (1e-12 of its scale) that is about to cross fires now,
+    /// not at the start of the next call. A master that redoes its step up
+    /// to a switch it was told of (`first_switch`) then gets the mode after
+    /// it at that communication point, as the monolithic model has it
+    /// there; the exact motion is the same either way.
+    pub(super) fn settle_at_end(&mut self, piece: &Piece) {
+        let (n, d) = (self.sys.n, &self.dynamics);
+        let load0 = self.load0();
+        // The rate of the support cluster's acceleration (prescribed: g ag').
+        let a0_rate = d.ag_gain * piece.exc.ag_rate;
+        let mut forced = 0u32;
+        for j in 1..=n {
+            let c = self.mode.contact[j];
+            match c {
+                Contact::SlipForward | Contact::SlipBackward => {
+                    // Its scale: how far the relative velocity moves over
+                    // a substep.
+                    let (sign, rate) = (c.slip_sign(), d.rel_accel(j, load0));
+                    let g = sign * (self.v[j] - self.v[j - 1]);
+                    if g <= 1e-12 * rate.abs() * self.h_max && sign * rate < 0.0 {
+                        forced |= 1 << j;
+                    }
+                }
+                Contact::Stuck if d.cluster_of[j] == 0 => {
+                    let f = d.force(j, &self.mode, load0);
+                    let cap = mode::stick_capacity(&self.sys, j);
+                    if cap - f.abs() <= 1e-12 * cap && f.signum() * d.mass_above[j] * a0_rate > 0.0
+                    {
+                        forced |= 1 << j;
+                    }
+                }
+                _ => {}
+            }
+        }
+        if forced != 0 {
+            self.fire_violated(&piece.exc, piece.t_ref, 0, forced);
+        }
+    }
+
     /// Fires the guards in `forced` and every guard among `candidates`
     /// that is zero or negative now.
     pub(super) fn fire_violated(

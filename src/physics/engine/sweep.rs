@@ -155,7 +155,9 @@ impl Simulator {
         });
         let (mass, inv_mass) = (d.mass[0], d.inv_mass0);
         let load_accel = d.load_accel0;
-        debug_assert!(d.prescribed || load_accel.to_bits() == (d.slip_load[0] * inv_mass).to_bits());
+        debug_assert!(
+            d.prescribed || load_accel.to_bits() == (d.slip_load[0] * inv_mass).to_bits()
+        );
         let prescribed = sys.prescribed();
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
         // The piece in locals (written back at the end): the loop reads
