@@ -128,6 +128,28 @@ pub struct Moving {
     pub lo: usize,
 }
 
+/// The rule of [`Dynamics::input_accel`] (the part of the structure
+/// cluster's absolute acceleration that the inputs make), written once:
+/// `fext / M0 + g ag`. `AG = false` drops `ag`'s term, exactly zero on a
+/// structure (`g = 0`, [`Dynamics::input_rule`]).
+#[derive(Clone, Copy, Debug)]
+pub struct InputRule<const AG: bool> {
+    inv_mass0: f64,
+    ag_gain: f64,
+}
+
+impl<const AG: bool> InputRule<AG> {
+    /// The acceleration that `ag` and `fext` make.
+    #[inline(always)]
+    pub fn accel(&self, ag: f64, fext: f64) -> f64 {
+        if AG {
+            fext * self.inv_mass0 + ag * self.ag_gain
+        } else {
+            fext * self.inv_mass0
+        }
+    }
+}
+
 /// The reduced dynamics of one mode: clusters, their masses and the
 /// constant forces the slipping interfaces put on them.
 #[derive(Clone, Copy, Debug)]
@@ -346,7 +368,21 @@ impl Dynamics {
     /// prescribed support in its reference mode).
     #[inline(always)]
     pub fn input_accel(&self, ag: f64, fext: f64) -> f64 {
-        fext * self.inv_mass0 + ag * self.ag_gain
+        self.input_rule::<true>().accel(ag, fext)
+    }
+
+    /// [`Dynamics::input_accel`]'s rule in registers, for the loops that
+    /// apply it at every substep. `AG = false` is for a structure only,
+    /// where `ag_gain` is 0: `ag`'s term (an exact zero) is left out at
+    /// compile time, so the structure's substep does not pay for the
+    /// support's term.
+    #[inline(always)]
+    pub fn input_rule<const AG: bool>(&self) -> InputRule<AG> {
+        debug_assert!(AG || (self.ag_gain == 0.0 && !self.prescribed));
+        InputRule {
+            inv_mass0: self.inv_mass0,
+            ag_gain: self.ag_gain,
+        }
     }
     /// Absolute acceleration of cluster `c`; `load0` is the structure load
     /// (used only by cluster 0).
