@@ -500,10 +500,17 @@ impl Simulator {
     /// Returns whether the support's law changed: its acceleration can
     /// then jump at once, as at a jump of `ag` (the caller fires the guards
     /// it violates).
+    #[inline]
     fn take_reference(&mut self) -> bool {
         if !self.sys.prescribed() {
             return false;
         }
+        self.take_support_reference()
+    }
+
+    /// [`Simulator::take_reference`] on a prescribed support.
+    #[inline(never)]
+    fn take_support_reference(&mut self) -> bool {
         let n = self.sys.n;
         let (u0, v0) = (self.u[0], self.v[0]);
         if u0 != 0.0 || v0 != 0.0 {

@@ -66,6 +66,14 @@ impl WorkSums {
     /// input work is `P·S - L (W·Σz)`, the viscous `c (V·S)`.
     #[inline(never)]
     fn flush(&mut self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
+        self.add_work(rows, mass, load_accel, work);
+        *self = WorkSums::default();
+    }
+
+    /// The sums' work added to `[input, viscous]` (as [`WorkSums::flush`],
+    /// the sums left as they are: a run's last use).
+    #[inline(never)]
+    fn add_work(&self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
         let (s, l) = (&self.products, &self.linear);
         let dot10 = |a: &[f64; 10]| -> f64 {
             let mut x = 0.0;
@@ -77,7 +85,6 @@ impl WorkSums {
         let with_load = dot(&rows.work_l, l);
         work[0] += mass * (dot10(&rows.work_p) - load_accel * with_load);
         work[1] += rows.c * dot10(&rows.work_v);
-        *self = WorkSums::default();
     }
 }
 
@@ -386,7 +393,7 @@ impl Simulator {
 
         *piece = cur;
         if taken > 0 {
-            sums.flush(&rows, mass, load_accel, &mut work);
+            sums.add_work(&rows, mass, load_accel, &mut work);
             // Input work on the upper clusters over the run, exact: with
             // v_c' = A_c - ag, -m ag v_c = d(m v_c²/2)/dt - m A_c v_c.
             let mut upper = 0.0;
