@@ -401,6 +401,7 @@ impl Simulator {
     /// `law_changed`: the support's law changed at this instant
     /// ([`Simulator::take_reference`]), which can move it at once as a jump
     /// of `ag` does.
+    #[inline]
     fn begin_piece(
         &mut self,
         t_end: f64,
@@ -422,12 +423,19 @@ impl Simulator {
         if pieces::is_jump(exc.fext, self.fext_now)
             || (prescribed && (law_changed || pieces::is_jump(exc.ag, self.ag_now)))
         {
-            // The guards that the jump violates fire as at any event.
-            let candidates = self.violated_at_jump(exc);
-            self.fire_violated(exc, self.t, candidates, 0);
+            self.fire_at_jump(exc);
         }
         self.take_inputs_now(exc, self.t);
         Ok(Piece::new(self.t, t_end, exc, self.h_max))
+    }
+
+    /// At a jump of the inputs, the guards that it violates fire as at
+    /// any event (out of line: rare).
+    #[cold]
+    #[inline(never)]
+    fn fire_at_jump(&mut self, exc: &Excitation) {
+        let candidates = self.violated_at_jump(exc);
+        self.fire_violated(exc, self.t, candidates, 0);
     }
 
     /// The inputs at the end of a finished piece.
