@@ -407,6 +407,7 @@ impl Simulator {
     /// `law_changed`: the support's law changed at this instant
     /// ([`Simulator::take_reference`]), which can move it at once as a jump
     /// of `ag` does.
+    #[inline]
     fn begin_piece(
         &mut self,
         t_end: f64,
@@ -428,12 +429,19 @@ impl Simulator {
         if pieces::is_jump(exc.fext, self.fext_now)
             || (prescribed && (law_changed || pieces::is_jump(exc.ag, self.ag_now)))
         {
-            // The guards that the jump violates fire as at any event.
-            let candidates = self.violated_at_jump(exc);
-            self.fire_violated(exc, self.t, candidates, 0);
+            self.fire_at_jump(exc);
         }
         self.take_inputs_now(exc, self.t);
         Ok(Piece::new(self.t, t_end, exc, self.h_max))
+    }
+
+    /// At a jump of the inputs, the guards that it violates fire as at
+    /// any event (out of line: rare).
+    #[cold]
+    #[inline(never)]
+    fn fire_at_jump(&mut self, exc: &Excitation) {
+        let candidates = self.violated_at_jump(exc);
+        self.fire_violated(exc, self.t, candidates, 0);
     }
 
     /// The inputs at the end of a finished piece.
@@ -506,10 +514,17 @@ impl Simulator {
     /// Returns whether the support's law changed: its acceleration can
     /// then jump at once, as at a jump of `ag` (the caller fires the guards
     /// it violates).
+    #[inline]
     fn take_reference(&mut self) -> bool {
         if !self.sys.prescribed() {
             return false;
         }
+        self.take_support_reference()
+    }
+
+    /// [`Simulator::take_reference`] on a prescribed support.
+    #[inline(never)]
+    fn take_support_reference(&mut self) -> bool {
         let n = self.sys.n;
         let (u0, v0) = (self.u[0], self.v[0]);
         if u0 != 0.0 || v0 != 0.0 {

@@ -128,9 +128,31 @@ pub struct Moving {
     pub lo: usize,
 }
 
+/// The rule of [`Dynamics::input_accel`] (the part of the structure
+/// cluster's absolute acceleration that the inputs make), written once:
+/// `fext / M0 + g ag`. `AG = false` drops `ag`'s term, exactly zero on a
+/// structure (`g = 0`, [`Dynamics::input_rule`]).
+#[derive(Clone, Copy, Debug)]
+pub struct InputRule<const AG: bool> {
+    inv_mass0: f64,
+    ag_gain: f64,
+}
+
+impl<const AG: bool> InputRule<AG> {
+    /// The acceleration that `ag` and `fext` make.
+    #[inline(always)]
+    pub fn accel(&self, ag: f64, fext: f64) -> f64 {
+        if AG {
+            fext * self.inv_mass0 + ag * self.ag_gain
+        } else {
+            fext * self.inv_mass0
+        }
+    }
+}
+
 /// The reduced dynamics of one mode: clusters, their masses and the
 /// constant forces the slipping interfaces put on them.
-#[derive(Clone, Debug)]
+#[derive(Clone, Copy, Debug)]
 pub struct Dynamics {
     /// Number of clusters (degrees of freedom).
     pub n_clusters: usize,
@@ -346,7 +368,21 @@ impl Dynamics {
     /// prescribed support in its reference mode).
     #[inline(always)]
     pub fn input_accel(&self, ag: f64, fext: f64) -> f64 {
-        fext * self.inv_mass0 + ag * self.ag_gain
+        self.input_rule::<true>().accel(ag, fext)
+    }
+
+    /// [`Dynamics::input_accel`]'s rule in registers, for the loops that
+    /// apply it at every substep. `AG = false` is for a structure only,
+    /// where `ag_gain` is 0: `ag`'s term (an exact zero) is left out at
+    /// compile time, so the structure's substep does not pay for the
+    /// support's term.
+    #[inline(always)]
+    pub fn input_rule<const AG: bool>(&self) -> InputRule<AG> {
+        debug_assert!(AG || (self.ag_gain == 0.0 && !self.prescribed));
+        InputRule {
+            inv_mass0: self.inv_mass0,
+            ag_gain: self.ag_gain,
+        }
     }
     /// Absolute acceleration of cluster `c`; `load0` is the structure load
     /// (used only by cluster 0).
@@ -502,6 +538,32 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
     worst
 }
 
+/// Whether `mode` satisfies the contact law at the interfaces of `zero`
+/// (free ones excluded by the caller): [`violation`] `<= CONSISTENCY_TOL`,
+/// decided cluster by cluster with the same [`cluster_law`], skipping the
+/// clusters that decide nothing (no interface of `zero` at their bottom,
+/// inside, or at their top, where the cluster above needs their
+/// acceleration) and stopping at the first that breaks the law.
+fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
+    let (mut bottom, mut accel_below) = (0, 0.0);
+    for end in 1..=sys.n + 1 {
+        if end <= sys.n && mode.is_stuck(end) {
+            continue;
+        }
+        // Bits bottom..=end (bit 0 and bit n + 1 are never in `zero`).
+        let span = (2u32 << end) - (1u32 << bottom);
+        if zero & span != 0 {
+            let (accel, w) = cluster_law(sys, mode, zero, load0, [bottom, end], accel_below);
+            if w > CONSISTENCY_TOL {
+                return false;
+            }
+            accel_below = accel;
+        }
+        bottom = end;
+    }
+    true
+}
+
 /// Interfaces (bit j) that carry no friction.
 fn free_mask(sys: &System) -> u32 {
     (1..=sys.n)
@@ -567,6 +629,21 @@ fn cluster_law(
     (accel, worst)
 }
 
+/// The force of stuck interface `j` of `mode` (body j-1 on body j) under
+/// the structure load `load0`, as [`cluster_law`] and [`Dynamics::force`] have
+/// it: only its sign is used, to order the walk's options.
+fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
+    let bottom = (1..j).rev().find(|&i| !mode.is_stuck(i)).unwrap_or(0);
+    let end = (j + 1..=sys.n).find(|&i| !mode.is_stuck(i)).unwrap_or(sys.n + 1);
+    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0);
+    let f_top = if end <= sys.n {
+        -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
+    } else {
+        0.0
+    };
+    sys.mass_down[j][end] * accel + f_top
+}
+
 /// What the resolution is asked to decide.
 #[derive(Clone, Copy, Debug)]
 pub struct ResolveRequest {
@@ -616,6 +693,9 @@ pub struct Resolved {
 /// slip only on the two clusters it separates. Where no assignment is
 /// consistent, the enumeration of all 3^k picks the least violating one.
 pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
+    if let Some(res) = resolve_most_stuck(sys, req) {
+        return res;
+    }
     let walk = Walk::new(sys, req);
     let mut search = Search {
         best: None,
@@ -653,6 +733,60 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     }
 }
 
+/// Most switches, decided without the walk where friction is equal
+/// (mus = muk) at every interface of `zero`: every interface of `zero`
+/// stuck but those of `must_break`, which slip in every combination of
+/// directions in the rule's order (at most two such interfaces). The first
+/// of these that is consistent is the walk's: no other assignment keeps as
+/// many interfaces stuck without one of `must_break` (rule 1 and 2), the
+/// stuck set, hence the kept count (rule 3) and the stuck bits, is the same
+/// for all of them, and they come in the order of their slip directions'
+/// bits (the rest of rule 4). `None`: none is consistent, or the case is
+/// not covered (the walk decides).
+fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
+    let zero = req.zero & !free_mask(sys);
+    let mut equal = true;
+    for j in 1..=sys.n {
+        if zero & (1 << j) != 0 {
+            equal &= sys.mus[j] == sys.muk[j];
+        }
+    }
+    let breaking = zero & req.must_break;
+    if !equal || breaking.count_ones() > 2 {
+        return None;
+    }
+    let mut mode = req.mode;
+    let mut slips = [0usize; 2];
+    let mut n_slips = 0;
+    for j in 1..=sys.n {
+        if breaking & (1 << j) != 0 {
+            slips[n_slips] = j;
+            n_slips += 1;
+        } else if zero & (1 << j) != 0 {
+            mode.contact[j] = Contact::Stuck;
+        }
+    }
+    // Slip directions as the rule's bits (backward = 1, from the bottom).
+    for code in 0u32..1 << n_slips {
+        for (s, &j) in slips[..n_slips].iter().enumerate() {
+            mode.contact[j] = if code & (1 << s) != 0 {
+                Contact::SlipBackward
+            } else {
+                Contact::SlipForward
+            };
+        }
+        if consistent(sys, &mode, zero, req.load0) {
+            return Some(Resolved {
+                mode,
+                consistent: true,
+                ambiguous: false,
+                tries: code + 1,
+            });
+        }
+    }
+    None
+}
+
 /// The state of a walk: the best consistent assignment so far and how many
 /// were found; `bound`: drop branches that cannot beat the best on the
 /// rule's first two criteria; `limit`: stop after so many.
@@ -680,6 +814,13 @@ struct Walk<'a> {
     index: [usize; MAX_BODIES],
     /// Number of interfaces in `zero` from j up (entry n + 1: none).
     remaining: [i32; MAX_BODIES + 1],
+    /// Of those, the ones that were stuck before (`was_stuck`).
+    remaining_kept: [i32; MAX_BODIES + 1],
+    /// The same two counts without the interfaces of `must_break` (a
+    /// branch that keeps none of those stuck can only gain these).
+    remaining_unbroken: [[i32; 2]; MAX_BODIES + 1],
+    /// The contacts tried at each interface of `zero`, in the order tried.
+    options: [[Contact; 3]; MAX_BODIES],
     /// The interfaces in `zero` with a contact to choose (bit j).
     zero_ifaces: u32,
 }
@@ -702,9 +843,53 @@ impl<'a> Walk<'a> {
                 k += 1;
             }
         }
-        let mut remaining = [0; MAX_BODIES + 1];
+        let (mut remaining, mut remaining_kept) = ([0; MAX_BODIES + 1], [0; MAX_BODIES + 1]);
+        let mut remaining_unbroken = [[0; 2]; MAX_BODIES + 1];
         for j in (1..=sys.n).rev() {
-            remaining[j] = remaining[j + 1] + i32::from(index[j] != usize::MAX);
+            let in_zero = index[j] != usize::MAX;
+            remaining[j] = remaining[j + 1] + i32::from(in_zero);
+            let kept = in_zero && req.was_stuck & (1 << j) != 0;
+            remaining_kept[j] = remaining_kept[j + 1] + i32::from(kept);
+            let unbroken = req.must_break & (1 << j) == 0;
+            let [u, k] = remaining_unbroken[j + 1];
+            remaining_unbroken[j] = [
+                u + i32::from(in_zero && unbroken),
+                k + i32::from(kept && unbroken),
+            ];
+        }
+        // The order changes only how soon the best is found (then the
+        // bound drops most branches), never which it is (the key decides).
+        // A stick that must break is tried slipping first, the way its
+        // force drives it first; a slip that has just stopped, stuck first,
+        // then the other way.
+        // The force is that with every interface of `zero` stuck: a slip
+        // that has just stopped is tried slipping first where it exceeds
+        // the static limit there.
+        use Contact::{SlipBackward as Back, SlipForward as Fwd, Stuck};
+        let mut options = [[Stuck, Fwd, Back]; MAX_BODIES];
+        let mut all_stuck = req.mode;
+        for j in 1..=sys.n {
+            if index[j] != usize::MAX {
+                all_stuck.contact[j] = Stuck;
+            }
+        }
+        for j in 1..=sys.n {
+            if index[j] == usize::MAX {
+                continue;
+            }
+            let breaks = req.must_break & (1 << j) != 0;
+            let stopped = !breaks && req.was_stuck & (1 << j) == 0;
+            if !(breaks || stopped) {
+                continue;
+            }
+            let mode = if breaks { &req.mode } else { &all_stuck };
+            let force = stuck_force(sys, mode, req.load0, j);
+            let slips = breaks || force.abs() > sys.mus[j] * sys.normal[j];
+            options[j] = match (slips, force > 0.0) {
+                (true, true) => [Back, Fwd, Stuck],
+                (true, false) => [Fwd, Back, Stuck],
+                (false, _) => [Stuck, Fwd, Back],
+            };
         }
         let zero_ifaces = (1..=sys.n)
             .filter(|&j| index[j] != usize::MAX)
@@ -714,6 +899,9 @@ impl<'a> Walk<'a> {
             req,
             index,
             remaining,
+            remaining_kept,
+            remaining_unbroken,
+            options,
             zero_ifaces,
         }
     }
@@ -731,29 +919,51 @@ impl<'a> Walk<'a> {
             bottom: 0,
             accel_below: 0.0,
         };
-        self.choose(1, open, &mut mode, (0, false), search);
+        self.choose(1, open, &mut mode, (0, 0, false), search);
+    }
+
+    /// Whether every completion of a branch at interface `j` (`stuck` and
+    /// `kept` so far below it, `broken`) ranks after the best found on the
+    /// rule's first three criteria: it has at most `remaining` more stuck
+    /// interfaces, at most `remaining_kept` more that were stuck before,
+    /// and `broken` can only be lost.
+    #[inline]
+    fn beaten(&self, j: usize, (stuck, kept, broken): (i32, i32, bool), search: &Search) -> bool {
+        match (search.bound, &search.best) {
+            (true, Some((best, _))) => {
+                // A best that keeps no stick of `must_break`: a branch that
+                // keeps none either can gain only the other interfaces.
+                let [more, more_kept] = if !broken && !best.0 {
+                    self.remaining_unbroken[j]
+                } else {
+                    [self.remaining[j], self.remaining_kept[j]]
+                };
+                let most = (broken, -(stuck + more), -(kept + more_kept));
+                most > (best.0, best.1, best.2)
+            }
+            _ => false,
+        }
     }
 
     /// Chooses the contact of interface `j` (kept where it is not in
     /// `zero`); a stuck one extends the open cluster, any other closes it.
-    /// `(stuck, broken)`: the interfaces of `zero` stuck below `j`, and
-    /// whether one of them is in `must_break`.
+    /// `(stuck, kept, broken)`: the interfaces of `zero` stuck below `j`,
+    /// those of them that were stuck before, and whether one of them is in
+    /// `must_break`.
     fn choose(
         &self,
         j: usize,
         open: Open,
         mode: &mut Mode,
-        (stuck, broken): (i32, bool),
+        (stuck, kept, broken): (i32, i32, bool),
         search: &mut Search,
     ) {
         if search.count >= search.limit {
             return;
         }
-        if let (true, Some((best, _))) = (search.bound, &search.best) {
-            // No completion has more stuck interfaces, or loses `broken`.
-            if (broken, -(stuck + self.remaining[j])) > (best.0, best.1) {
-                return;
-            }
+        // No completion beats the best on the first three criteria.
+        if self.beaten(j, (stuck, kept, broken), search) {
+            return;
         }
         let n = self.sys.n;
         if j > n {
@@ -767,30 +977,28 @@ impl<'a> Walk<'a> {
             }
             return;
         }
-        // A stick that must break is tried slipping first: the best
-        // assignment usually lets it go, and once found the bound drops
-        // every branch that keeps it stuck. The order changes only how soon
-        // the best is found, never which it is (the key decides).
-        let options: &[Contact] = if self.index[j] == usize::MAX {
-            &[]
-        } else if self.req.must_break & (1 << j) != 0 {
-            &[Contact::SlipForward, Contact::SlipBackward, Contact::Stuck]
-        } else {
-            &[Contact::Stuck, Contact::SlipForward, Contact::SlipBackward]
-        };
-        let kept = [self.req.mode.contact[j]];
-        let options = if options.is_empty() {
-            &kept[..]
-        } else {
-            options
-        };
         let in_zero = self.index[j] != usize::MAX;
+        let keep = [self.req.mode.contact[j]];
+        let options = if in_zero {
+            &self.options[j][..]
+        } else {
+            &keep[..]
+        };
         for &c in options {
             mode.contact[j] = c;
             if c == Contact::Stuck {
                 let breaks = in_zero && self.req.must_break & (1 << j) != 0;
-                let counted = (stuck + i32::from(in_zero), broken || breaks);
+                let was = in_zero && self.req.was_stuck & (1 << j) != 0;
+                let counted = (
+                    stuck + i32::from(in_zero),
+                    kept + i32::from(was),
+                    broken || breaks,
+                );
                 self.choose(j + 1, open, mode, counted, search);
+            } else if self.beaten(j + 1, (stuck, kept, broken), search) {
+                // The bound of the next interface, before the cluster is
+                // closed: the branch is dropped as it would be there.
+                continue;
             } else if let Some(accel) = {
                 search.tries += 1;
                 self.close(open, j, mode)
@@ -799,7 +1007,7 @@ impl<'a> Walk<'a> {
                     bottom: j,
                     accel_below: accel,
                 };
-                self.choose(j + 1, next, mode, (stuck, broken), search);
+                self.choose(j + 1, next, mode, (stuck, kept, broken), search);
             }
         }
         mode.contact[j] = self.req.mode.contact[j];

@@ -281,7 +281,7 @@ pub(super) struct DynamicsCache {
 }
 
 /// How many modes' dynamics are kept (then the oldest is replaced).
-const DYNAMICS_CACHE_SIZE: usize = 32;
+const DYNAMICS_CACHE_SIZE: usize = 64;
 
 impl DynamicsCache {
     /// The mode as a number: two bits per interface, and the block count.
@@ -303,11 +303,11 @@ impl DynamicsCache {
     pub(super) fn load(&mut self, sys: &System, mode: &Mode, out: &mut Dynamics) {
         let key = DynamicsCache::key(mode);
         if let Some(i) = self.keys.iter().position(|&k| k == key) {
-            out.clone_from(&self.dynamics[i]);
+            *out = self.dynamics[i];
             return;
         }
         let d = Dynamics::new(sys, mode);
-        out.clone_from(&d);
+        *out = d;
         if self.keys.len() < DYNAMICS_CACHE_SIZE {
             self.keys.push(key);
             self.dynamics.push(d);

@@ -175,10 +175,10 @@ impl Flow {
         Poly::new(k, 2)
     }
 
-    /// The guard `g` as polynomials (a stick band has two sides), `None`
-    /// where it is proved positive over the whole stretch from its
-    /// coefficients alone.
-    fn guard_polys(&self, sim: &Simulator, g: &Guard) -> [Option<Poly>; 2] {
+    /// Whether the guard `g` is proved positive over the whole stretch
+    /// from its coefficients alone (most are: no polynomial is built).
+    #[inline]
+    fn holds(&self, sim: &Simulator, g: &Guard) -> bool {
         match *g {
             Guard::Slip { hi, lo, sign } => {
                 // Clusters above the structure's: quadratic velocities
@@ -194,9 +194,33 @@ impl Flow {
                     let g0 = sign * (sim.v[d.bottom[hi]] - sim.v[d.bottom[lo]]);
                     (g0, (upper_rate(hi) - upper_rate(lo)).abs())
                 };
-                if g0 > spread {
-                    return [None, None];
-                }
+                g0 > spread
+            }
+            Guard::Stuck {
+                mass_above,
+                f_top,
+                cap,
+            } => {
+                // cap - |mass_above A0 + f_top| >= 0: A0 within [lo, hi].
+                let (lo, hi) = Flow::stick_band(mass_above, f_top, cap);
+                let (a0, bound) = (self.accel_start, self.accel_spread_bound);
+                a0 - bound > lo && a0 + bound < hi
+            }
+        }
+    }
+
+    /// The band of the absolute acceleration inside which a stick holds.
+    #[inline(always)]
+    fn stick_band(mass_above: f64, f_top: f64, cap: f64) -> (f64, f64) {
+        ((-cap - f_top) / mass_above, (cap - f_top) / mass_above)
+    }
+
+    /// The guard `g`, not proved by [`Flow::holds`], as polynomials (a
+    /// stick band has two sides), `None` for a side proved positive over
+    /// the stretch by its exact spread.
+    fn guard_polys(&self, sim: &Simulator, g: &Guard) -> [Option<Poly>; 2] {
+        match *g {
+            Guard::Slip { hi, lo, sign } => {
                 let (vh, vl) = (self.velocity(sim, hi), self.velocity(sim, lo));
                 let deg = vh.deg.max(vl.deg);
                 let c = std::array::from_fn(|k| sign * (vh.c[k] - vl.c[k]));
@@ -208,13 +232,8 @@ impl Flow {
                 f_top,
                 cap,
             } => {
-                // cap - |mass_above A0 + f_top| >= 0: A0 within [lo, hi].
-                let lo = (-cap - f_top) / mass_above;
-                let hi = (cap - f_top) / mass_above;
-                let (a0, bound) = (self.accel_start, self.accel_spread_bound);
-                if a0 - bound > lo && a0 + bound < hi {
-                    return [None, None];
-                }
+                let (lo, hi) = Flow::stick_band(mass_above, f_top, cap);
+                let a0 = self.accel_start;
                 let (accel, spread) = self.accel();
                 [
                     (a0 - spread <= lo).then(|| accel.affine(1.0, -lo)),
@@ -362,10 +381,20 @@ impl Simulator {
         let mut ifaces = d.changing_guards;
         let mut earliest: Option<(f64, usize)> = None;
         let mut at_once = 0u32;
+        // Every stick of the structure's cluster at once: the acceleration
+        // kept inside the band inside all of them (then each guard's own
+        // test, on a wider band, returns no polynomial either).
+        let sticks_hold = d.stick_band.is_some_and(|(lo, hi)| {
+            let (a0, bound) = (flow.accel_start, flow.accel_spread_bound);
+            a0 - bound > lo && a0 + bound < hi
+        });
         for g in &d.guards[..d.n_guards] {
             let j = ifaces.trailing_zeros() as usize;
             ifaces &= ifaces - 1;
-            if muted & (1 << j) != 0 {
+            if muted & (1 << j) != 0 || (sticks_hold && matches!(g, Guard::Stuck { .. })) {
+                continue;
+            }
+            if flow.holds(self, g) {
                 continue;
             }
             for poly in flow.guard_polys(self, g).iter().flatten() {

@@ -69,8 +69,8 @@ pub(super) fn canonical_length(h: f64) -> f64 {
 /// The exact map of the structure's cluster over a substep of length `h`.
 #[derive(Clone, Debug)]
 pub(super) struct ExactMap {
-    /// The cluster's mass and the substep length it was built for.
-    pub(super) mass: f64,
+    /// The substep length it was built for (its cluster's mass is the
+    /// cache's key).
     pub(super) h: f64,
     /// Degree of its Taylor sum ([`degree`]).
     pub(super) degree: usize,
@@ -193,7 +193,6 @@ impl ExactMap {
             degree,
             five_over_three,
             one_over_three,
-            mass,
             h,
             u,
             v,
@@ -240,6 +239,8 @@ pub(super) fn dot(a: &[f64; 4], z: &[f64; 4]) -> f64 {
 #[derive(Clone, Debug, Default)]
 pub(super) struct MapCache {
     maps: Vec<ExactMap>,
+    /// Each map's mass and length, bit for bit (searched first: short).
+    keys: Vec<[u64; 2]>,
     next: usize,
     /// The map found last.
     last: usize,
@@ -253,22 +254,25 @@ impl MapCache {
     pub(super) fn index(&mut self, sys: &System, mass: f64, h: f64) -> usize {
         // The map of the previous call first: a mode's run and the next
         // call of a master with a fixed step ask for it again.
-        if let Some(m) = self.maps.get(self.last) {
-            if m.mass == mass && m.h == h {
-                return self.last;
-            }
+        // Bit for bit: the same equality as `==` on these (finite,
+        // positive) values.
+        let key = [mass.to_bits(), h.to_bits()];
+        if self.keys.get(self.last) == Some(&key) {
+            return self.last;
         }
-        if let Some(i) = self.maps.iter().position(|m| m.mass == mass && m.h == h) {
+        if let Some(i) = self.keys.iter().position(|k| *k == key) {
             self.last = i;
             return i;
         }
         let map = ExactMap::new(sys, mass, h);
         self.last = if self.maps.len() < CACHE_SIZE {
             self.maps.push(map);
+            self.keys.push(key);
             self.maps.len() - 1
         } else {
             let i = self.next;
             self.maps[i] = map;
+            self.keys[i] = key;
             self.next = (i + 1) % CACHE_SIZE;
             i
         };

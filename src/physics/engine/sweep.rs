@@ -66,6 +66,14 @@ impl WorkSums {
     /// input work is `P·S - L (W·Σz)`, the viscous `c (V·S)`.
     #[inline(never)]
     fn flush(&mut self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
+        self.add_work(rows, mass, load_accel, work);
+        *self = WorkSums::default();
+    }
+
+    /// The sums' work added to `[input, viscous]` (as [`WorkSums::flush`],
+    /// the sums left as they are: a run's last use).
+    #[inline(never)]
+    fn add_work(&self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
         let (s, l) = (&self.products, &self.linear);
         let dot10 = |a: &[f64; 10]| -> f64 {
             let mut x = 0.0;
@@ -77,7 +85,6 @@ impl WorkSums {
         let with_load = dot(&rows.work_l, l);
         work[0] += mass * (dot10(&rows.work_p) - load_accel * with_load);
         work[1] += rows.c * dot10(&rows.work_v);
-        *self = WorkSums::default();
     }
 }
 
@@ -116,23 +123,40 @@ impl Simulator {
         piece: &mut Piece,
         pieces: &mut impl PieceSource,
     ) -> Option<(f64, Excitation)> {
+        // One instance per cluster count, and per input rule: a structure's
+        // substeps do not pay for a prescribed support's `ag` term.
+        if self.sys.prescribed() {
+            self.sweep_rule::<true>(piece, pieces)
+        } else {
+            self.sweep_rule::<false>(piece, pieces)
+        }
+    }
+
+    #[inline(always)]
+    fn sweep_rule<const AG: bool>(
+        &mut self,
+        piece: &mut Piece,
+        pieces: &mut impl PieceSource,
+    ) -> Option<(f64, Excitation)> {
         match self.dynamics.n_clusters {
-            1 => self.sweep_clusters::<1>(piece, pieces),
-            2 => self.sweep_clusters::<2>(piece, pieces),
-            3 => self.sweep_clusters::<3>(piece, pieces),
-            4 => self.sweep_clusters::<4>(piece, pieces),
-            5 => self.sweep_clusters::<5>(piece, pieces),
-            6 => self.sweep_clusters::<6>(piece, pieces),
-            7 => self.sweep_clusters::<7>(piece, pieces),
-            8 => self.sweep_clusters::<8>(piece, pieces),
-            _ => self.sweep_clusters::<MAX_BODIES>(piece, pieces),
+            1 => self.sweep_clusters::<1, AG>(piece, pieces),
+            2 => self.sweep_clusters::<2, AG>(piece, pieces),
+            3 => self.sweep_clusters::<3, AG>(piece, pieces),
+            4 => self.sweep_clusters::<4, AG>(piece, pieces),
+            5 => self.sweep_clusters::<5, AG>(piece, pieces),
+            6 => self.sweep_clusters::<6, AG>(piece, pieces),
+            7 => self.sweep_clusters::<7, AG>(piece, pieces),
+            8 => self.sweep_clusters::<8, AG>(piece, pieces),
+            _ => self.sweep_clusters::<MAX_BODIES, AG>(piece, pieces),
         }
     }
 
     /// [`Simulator::sweep`] in a mode with `NC` clusters (cluster 0 the
-    /// structure's; moving interface m between clusters m and m + 1).
+    /// structure's; moving interface m between clusters m and m + 1), with
+    /// the input rule `Dynamics::input_rule::<AG>` (`AG`: a prescribed
+    /// support).
     #[inline(never)]
-    fn sweep_clusters<const NC: usize>(
+    fn sweep_clusters<const NC: usize, const AG: bool>(
         &mut self,
         piece: &mut Piece,
         pieces: &mut impl PieceSource,
@@ -158,7 +182,9 @@ impl Simulator {
         debug_assert!(
             d.prescribed || load_accel.to_bits() == (d.slip_load[0] * inv_mass).to_bits()
         );
-        let prescribed = sys.prescribed();
+        let prescribed = AG;
+        debug_assert_eq!(AG, sys.prescribed());
+        let rule = d.input_rule::<AG>();
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
         // The piece in locals (written back at the end): the loop reads
         // them every substep.
@@ -191,7 +217,7 @@ impl Simulator {
         let mut work = [0.0; 2];
         let mut t0 = self.t;
         let mut inp = Inputs::at(&cur, t0);
-        let mut a_abs = load_accel + d.input_accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
+        let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
         let mut taken = 0u64;
         let mut pending = None;
 
@@ -256,16 +282,16 @@ impl Simulator {
             // of the times.
             let hs = cur.h;
             let t1 = if cur.i == cur.n { cur.t_end } else { t0 + hs };
-            let fext_rate_m = d.input_accel(inp.ag_rate, inp.fext_rate);
+            let fext_rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
             let z = [
                 u0,
                 vel[0],
-                load_accel + d.input_accel(inp.ag, inp.fext) - inp.ag,
+                load_accel + rule.accel(inp.ag, inp.fext) - inp.ag,
                 fext_rate_m - inp.ag_rate,
             ];
             let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
             let (ag1, fext1) = (inp.ag + inp.ag_rate * hs, inp.fext + inp.fext_rate * hs);
-            let a1 = load_accel + d.input_accel(ag1, fext1) - w2 * u1 - cm * v1;
+            let a1 = load_accel + rule.accel(ag1, fext1) - w2 * u1 - cm * v1;
             let s3 = map.sup_v(3, &z);
             // Stuck interfaces: the absolute acceleration stays in the band.
             // Its rate: A' = Fext'/m - w2 v - cm (A - ag).
@@ -321,7 +347,7 @@ impl Simulator {
                     (!u_proved).then_some(&mut peak_u0),
                     (!a_proved).then_some(&mut peak_a0),
                 ];
-                let cf = load_accel + d.input_accel(inp.ag, inp.fext);
+                let cf = load_accel + rule.accel(inp.ag, inp.fext);
                 let rates = [w2, cm, cf, fext_rate_m];
                 if raise_substep_peaks(peaks, z, map.h, rates, map.degree, [u1, a1]).is_err() {
                     break;
@@ -367,7 +393,7 @@ impl Simulator {
 
         *piece = cur;
         if taken > 0 {
-            sums.flush(&rows, mass, load_accel, &mut work);
+            sums.add_work(&rows, mass, load_accel, &mut work);
             // Input work on the upper clusters over the run, exact: with
             // v_c' = A_c - ag, -m ag v_c = d(m v_c²/2)/dt - m A_c v_c.
             let mut upper = 0.0;
@@ -379,9 +405,12 @@ impl Simulator {
             self.e_input += work[0] + upper;
             // A prescribed support's drift from the input frame: its work
             // on the stack beyond the input (Dynamics::support_force).
-            let support_work = d.support_force * (u0 - u0_start);
-            if support_work != 0.0 {
-                self.e_input += support_work;
+            // (0 on a structure: its run does not compute it.)
+            if AG {
+                let support_work = d.support_force * (u0 - u0_start);
+                if support_work != 0.0 {
+                    self.e_input += support_work;
+                }
             }
             self.e_viscous += work[1];
             let (mut shift_all, mut vel_all) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);

@@ -1,0 +1,79 @@
+//! The frontier bench's ratio for a few scenes (quicker than the bench):
+//! `cargo run --release --example ratio -- n8 n2 percall` (ROUNDS, REPS).
+#[path = "../tests/common/mod.rs"]
+#[allow(dead_code, unused_imports)]
+mod common;
+use stacked_live_load::{ground::record, physics::sdof, Excitation, Settings, Simulator};
+use std::hint::black_box;
+use std::time::Instant;
+
+fn main() {
+    let rounds: usize = std::env::var("ROUNDS").ok().map_or(11, |s| s.parse().unwrap());
+    let reps: usize = std::env::var("REPS").ok().map_or(20, |s| s.parse().unwrap());
+    let scenes: Vec<String> = std::env::args().skip(1).collect();
+    let shipped = stacked_live_load::GroundMotion::read(
+        &common::shared_record("RSN787_LOMAP_SLC270.AT2"),
+        9.81,
+    )
+    .unwrap();
+    let records = [
+        ("shipped", common::truncate(&shipped, 20.0)),
+        ("b1", common::broadband_record(&mut common::Rng(0xb0ad1e), 20.0, 0.005)),
+        ("b2", common::broadband_record(&mut common::Rng(0xf1e1d5e), 20.0, 0.005)),
+    ];
+    for (name, gm) in &records {
+        for scene in &scenes {
+            let p = match scene.as_str() {
+                "n0" => common::graded_stack(0),
+                "n8s" => common::graded_stack_static_above_kinetic(),
+                "n8" => common::graded_stack(8),
+                _ => common::graded_stack(2),
+            };
+            let piece = |k: usize| {
+                let (t0, t1) = (gm.time[k], gm.time[k + 1]);
+                let exc = Excitation {
+                    ag: gm.accel[k],
+                    ag_rate: (gm.accel[k + 1] - gm.accel[k]) / (t1 - t0),
+                    ..Excitation::default()
+                };
+                (t1, exc)
+            };
+            let run = |way: &str| match way {
+                "percall" => {
+                    let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+                    for k in 0..gm.time.len() - 1 {
+                        let (t1, exc) = piece(k);
+                        sim.advance(t1, &exc).unwrap();
+                    }
+                    black_box(sim.outputs().peak_up);
+                }
+                "floor" => {
+                    let omega = 2.0 * std::f64::consts::PI / p.tp;
+                    black_box(sdof::response(omega, p.zeta, 0.005, black_box(&gm.accel)));
+                }
+                _ => {
+                    let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+                    record::run(&mut sim, gm, 1.0).unwrap();
+                    black_box(sim.outputs().peak_up);
+                }
+            };
+            // percall against the record path; the others against the floor.
+            let other = if scene == "percall" { "record" } else { "floor" };
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            for _ in 0..rounds {
+                let t = Instant::now();
+                for _ in 0..reps {
+                    run(scene);
+                }
+                a.push(t.elapsed().as_secs_f64() / reps as f64);
+                let t = Instant::now();
+                for _ in 0..reps {
+                    run(other);
+                }
+                b.push(t.elapsed().as_secs_f64() / reps as f64);
+            }
+            let (ma, mb) = (common::median(a), common::median(b));
+            println!("{name:8} {scene:8} {:8.1} us / {other} {:8.1} us = {:.2}x", ma * 1e6, mb * 1e6, ma / mb);
+        }
+    }
+}
