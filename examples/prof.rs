@@ -61,7 +61,8 @@ fn main() {
             }
             "onecall" => {
                 let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
-                sim.advance_pieces((0..gm.time.len() - 1).map(piece)).unwrap();
+                sim.advance_pieces((0..gm.time.len() - 1).map(piece))
+                    .unwrap();
                 events = sim.stats().events;
                 black_box(sim.outputs());
             }
@@ -70,7 +71,12 @@ fn main() {
                 record::run(&mut sim, &gm, 1.0).unwrap();
                 events = sim.stats().events;
                 let st = sim.stats();
-                eprintln!("steps {} events {} tries {}", st.steps, st.events, (sim.work() - st.steps - 64*st.events)/2);
+                eprintln!(
+                    "steps {} events {} tries {}",
+                    st.steps,
+                    st.events,
+                    (sim.work() - st.steps - 64 * st.events) / 2
+                );
                 if std::env::var("OUT").is_ok() {
                     println!("{:?}", sim.outputs());
                 }

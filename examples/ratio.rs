@@ -8,8 +8,12 @@ use std::hint::black_box;
 use std::time::Instant;
 
 fn main() {
-    let rounds: usize = std::env::var("ROUNDS").ok().map_or(11, |s| s.parse().unwrap());
-    let reps: usize = std::env::var("REPS").ok().map_or(20, |s| s.parse().unwrap());
+    let rounds: usize = std::env::var("ROUNDS")
+        .ok()
+        .map_or(11, |s| s.parse().unwrap());
+    let reps: usize = std::env::var("REPS")
+        .ok()
+        .map_or(20, |s| s.parse().unwrap());
     let scenes: Vec<String> = std::env::args().skip(1).collect();
     let shipped = stacked_live_load::GroundMotion::read(
         &common::shared_record("RSN787_LOMAP_SLC270.AT2"),
@@ -18,8 +22,14 @@ fn main() {
     .unwrap();
     let records = [
         ("shipped", common::truncate(&shipped, 20.0)),
-        ("b1", common::broadband_record(&mut common::Rng(0xb0ad1e), 20.0, 0.005)),
-        ("b2", common::broadband_record(&mut common::Rng(0xf1e1d5e), 20.0, 0.005)),
+        (
+            "b1",
+            common::broadband_record(&mut common::Rng(0xb0ad1e), 20.0, 0.005),
+        ),
+        (
+            "b2",
+            common::broadband_record(&mut common::Rng(0xf1e1d5e), 20.0, 0.005),
+        ),
     ];
     for (name, gm) in &records {
         for scene in &scenes {
@@ -58,7 +68,11 @@ fn main() {
                 }
             };
             // percall against the record path; the others against the floor.
-            let other = if scene == "percall" { "record" } else { "floor" };
+            let other = if scene == "percall" {
+                "record"
+            } else {
+                "floor"
+            };
             let (mut a, mut b) = (Vec::new(), Vec::new());
             for _ in 0..rounds {
                 let t = Instant::now();
@@ -73,7 +87,12 @@ fn main() {
                 b.push(t.elapsed().as_secs_f64() / reps as f64);
             }
             let (ma, mb) = (common::median(a), common::median(b));
-            println!("{name:8} {scene:8} {:8.1} us / {other} {:8.1} us = {:.2}x", ma * 1e6, mb * 1e6, ma / mb);
+            println!(
+                "{name:8} {scene:8} {:8.1} us / {other} {:8.1} us = {:.2}x",
+                ma * 1e6,
+                mb * 1e6,
+                ma / mb
+            );
         }
     }
 }

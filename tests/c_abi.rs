@@ -124,11 +124,11 @@ fn c_program_runs_stack_on_floor_bit_for_bit_with_the_engine() {
             ag_rate: slope,
             ..Default::default()
         };
-        let shown = stacked_live_load::fmi::ports::exact_at_step_start(&sim, &held, mobility)
-            .unwrap();
+        let shown =
+            stacked_live_load::fmi::ports::exact_at_step_start(&sim, &held, mobility).unwrap();
         let o = shown.outputs();
-        let gain = stacked_live_load::physics::mode::Dynamics::new(shown.system(), shown.mode())
-            .ag_gain;
+        let gain =
+            stacked_live_load::physics::mode::Dynamics::new(shown.system(), shown.mode()).ag_gain;
         let expected = [
             o.floor_force,
             o.attached_mass,

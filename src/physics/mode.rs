@@ -634,7 +634,9 @@ fn cluster_law(
 /// it: only its sign is used, to order the walk's options.
 fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
     let bottom = (1..j).rev().find(|&i| !mode.is_stuck(i)).unwrap_or(0);
-    let end = (j + 1..=sys.n).find(|&i| !mode.is_stuck(i)).unwrap_or(sys.n + 1);
+    let end = (j + 1..=sys.n)
+        .find(|&i| !mode.is_stuck(i))
+        .unwrap_or(sys.n + 1);
     let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0);
     let f_top = if end <= sys.n {
         -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
