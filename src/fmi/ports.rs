@@ -76,7 +76,10 @@ pub fn exact_at_step_start(
         let now = shown.time();
         let mut ahead = shown.clone();
         ahead.watch_switches();
-        ahead.advance(now + SWITCH_LOOKAHEAD, exc)?;
+        // Under the law of the step that ended here (its reference mode): the
+        // inputs held are the old mode's, and a new reference would break a
+        // stick the step's law made consistent (docs/stack-on-a-floor.md).
+        ahead.advance_keeping_reference(now + SWITCH_LOOKAHEAD, exc)?;
         if !ahead.first_switch().is_nan() {
             shown = ahead;
         }

@@ -351,8 +351,30 @@ impl Simulator {
     /// On a prescribed support the mode at the call's start becomes the
     /// reference of the support's law (the master computed the inputs with
     /// it), after the support's drift is taken out ([`mode::support_law`]).
-    pub fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
-        let mut law_changed = self.take_reference();
+    pub fn advance_source(&mut self, pieces: impl PieceSource) -> Result<(), SimError> {
+        let law_changed = self.take_reference();
+        self.advance_source_from(pieces, law_changed)
+    }
+
+    /// As [`Simulator::advance`], but the support's law keeps its reference
+    /// (the mode at the start of the last call that took one): a look past
+    /// the end of a step, before the master has set inputs for the mode the
+    /// step ended in, sees the motion that step would have gone on with. A
+    /// new reference there would make the support follow the held `ag`, the
+    /// floor's acceleration in the old mode, at once (`ports::at_step_start`).
+    pub fn advance_keeping_reference(
+        &mut self,
+        t_end: f64,
+        exc: &Excitation,
+    ) -> Result<(), SimError> {
+        self.advance_source_from(Plain(std::iter::once((t_end, *exc))), false)
+    }
+
+    fn advance_source_from(
+        &mut self,
+        mut pieces: impl PieceSource,
+        mut law_changed: bool,
+    ) -> Result<(), SimError> {
         let mut pending = pieces.next_piece();
         while let Some((t_end, exc)) = pending.take() {
             let mut piece = self.begin_piece(t_end, &exc, law_changed)?;

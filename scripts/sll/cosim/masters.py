@@ -386,25 +386,39 @@ class CoSimulation:
             return False
 
     def _sync(self, plan, t: float):
-        """Consistent values at t: the floor's acceleration to the stack, the
-        stack's attached mass and sliding force (the mode at t+) to the floor,
-        again until the mode no longer changes (a switch moves mass between
-        them, which changes the floor's acceleration)."""
+        """Consistent values at t: the stack's attached mass and sliding force
+        (the mode it shows at t) to the floor first, then the floor's
+        acceleration with them to the stack, again until the mode no longer
+        changes (a switch moves mass between them, which changes the floor's
+        acceleration). The order matters after a landing on a switch: the
+        stack shows the step's left limit (say a block that came to rest and
+        stuck under the support's law); an `ag` set on it re-references the
+        law to that mode (a0 = ag), so the floor's acceleration without the
+        attached mass (the old mode's) would break the stick at once, and the
+        master would never add the mass (docs/stack-on-a-floor.md)."""
+        entries = plan["entries"]
+        self._floor_from_stacks(entries)
         for _ in range(6):
-            changed = False
-            for e in plan["entries"]:
+            for e in entries:
                 e["stack"].set("ag", e["floor"].get(e["accel"]), 0.0)
-            for e in plan["entries"]:
-                mass = e["stack"].get("attachedMass")
-                sliding = e["stack"].get("slidingForce")
-                if mass != e["mass"]:
-                    e["floor"].add_mass(e["force"], mass)
-                    e["mass"], changed = mass, True
-                if sliding != e["sliding"]:
-                    e["floor"].set(e["force"], sliding, 0.0)
-                    e["sliding"], changed = sliding, True
-            if not changed:
+            if not self._floor_from_stacks(entries):
                 return
+
+    @staticmethod
+    def _floor_from_stacks(entries) -> bool:
+        """Each stack's attached mass and sliding force into its floor partner
+        where they changed; whether any did."""
+        changed = False
+        for e in entries:
+            mass = e["stack"].get("attachedMass")
+            sliding = e["stack"].get("slidingForce")
+            if mass != e["mass"]:
+                e["floor"].add_mass(e["force"], mass)
+                e["mass"], changed = mass, True
+            if sliding != e["sliding"]:
+                e["floor"].set(e["force"], sliding, 0.0)
+                e["sliding"], changed = sliding, True
+        return changed
 
     def _switch_time(self, stack: Partner, t: float, end: float, reached: float, H: float) -> float:
         """Where the stack's step from t should have stopped: its early return,
