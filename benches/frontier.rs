@@ -18,9 +18,7 @@
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use stacked_live_load::{
-    ground::record, physics::sdof, Excitation, GroundMotion, Params, Settings, Simulator,
-};
+use stacked_live_load::{ground::record, physics::sdof, GroundMotion, Params, Settings, Simulator};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -96,15 +94,7 @@ fn errors(p: &Params, gm: &GroundMotion) -> (f64, f64) {
 /// through the record path, timed alternately: `[per call, in one call,
 /// record]`.
 fn timed_inputs(p: &Params, gm: &GroundMotion, rounds: usize, reps: usize) -> [f64; 3] {
-    let piece = |k: usize| {
-        let (t0, t1) = (gm.time[k], gm.time[k + 1]);
-        let exc = Excitation {
-            ag: gm.accel[k],
-            ag_rate: (gm.accel[k + 1] - gm.accel[k]) / (t1 - t0),
-            ..Excitation::default()
-        };
-        (t1, exc)
-    };
+    let piece = |k: usize| common::record_piece(gm, k);
     let per_call = || {
         let mut sim = Simulator::new(p, &Settings::default()).unwrap();
         for k in 0..gm.time.len() - 1 {

@@ -5,7 +5,7 @@
 #[path = "../tests/common/mod.rs"]
 #[allow(dead_code, unused_imports)]
 mod common;
-use stacked_live_load::{ground::record, physics::sdof, Excitation, Settings, Simulator};
+use stacked_live_load::{ground::record, physics::sdof, Settings, Simulator};
 use std::hint::black_box;
 
 fn main() {
@@ -31,15 +31,7 @@ fn main() {
         "n8s" => common::graded_stack_static_above_kinetic(),
         _ => common::graded_stack(8),
     };
-    let piece = |k: usize| {
-        let (t0, t1) = (gm.time[k], gm.time[k + 1]);
-        let exc = Excitation {
-            ag: gm.accel[k],
-            ag_rate: (gm.accel[k + 1] - gm.accel[k]) / (t1 - t0),
-            ..Excitation::default()
-        };
-        (t1, exc)
-    };
+    let piece = |k: usize| common::record_piece(&gm, k);
     let mut events = 0;
     for _ in 0..reps {
         match scene {

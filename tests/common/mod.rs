@@ -873,6 +873,23 @@ pub fn started(start: f64, setup: impl FnOnce(&mut Instance)) -> (Instance, Capt
     (inst, log)
 }
 
+/// Sample interval `k` of a record as a linear piece of `ag` (its end time
+/// and its excitation): the samples a co-simulation master would set as
+/// inputs with slopes, for the benchmarks that compare that with the record.
+#[allow(dead_code)]
+pub fn record_piece(
+    gm: &stacked_live_load::GroundMotion,
+    k: usize,
+) -> (f64, stacked_live_load::Excitation) {
+    let (t0, t1) = (gm.time[k], gm.time[k + 1]);
+    let exc = stacked_live_load::Excitation {
+        ag: gm.accel[k],
+        ag_rate: (gm.accel[k + 1] - gm.accel[k]) / (t1 - t0),
+        ..Default::default()
+    };
+    (t1, exc)
+}
+
 /// The benchmarks' stacks (`benches/frontier.rs`, `examples/scaling.rs`):
 /// the paper's two blocks (`Params::default`), and above them lighter, less
 /// rough blocks, friction falling upwards but never equal to the one below
