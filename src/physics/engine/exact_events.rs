@@ -162,19 +162,6 @@ impl Flow {
         })
     }
 
-    /// Velocity of cluster `c` (relative to the support) as a polynomial.
-    fn velocity(&self, sim: &Simulator, c: usize) -> Poly {
-        if c == 0 {
-            return self.v;
-        }
-        let d = &sim.dynamics;
-        let mut k = [0.0; N_COEF];
-        k[0] = sim.v[d.bottom[c]];
-        k[1] = (d.accel_const[c] - self.ag0) * self.h;
-        k[2] = -0.5 * self.ag_rate * self.h * self.h;
-        Poly::new(k, 2)
-    }
-
     /// Whether the guard `g` is proved positive over the whole stretch
     /// from its coefficients alone (most are: no polynomial is built).
     #[inline]
@@ -216,16 +203,41 @@ impl Flow {
     }
 
     /// The guard `g`, not proved by [`Flow::holds`], as polynomials (a
-    /// stick band has two sides), `None` for a side proved positive over
-    /// the stretch by its exact spread.
-    fn guard_polys(&self, sim: &Simulator, g: &Guard) -> [Option<Poly>; 2] {
+    /// stick band has two sides) written to `out`, without a side proved
+    /// positive over the stretch by its exact spread; returns how many
+    /// (written in place: no array of options moved per guard).
+    fn guard_polys(&self, sim: &Simulator, g: &Guard, out: &mut [Poly; 2]) -> usize {
         match *g {
             Guard::Slip { hi, lo, sign } => {
-                let (vh, vl) = (self.velocity(sim, hi), self.velocity(sim, lo));
-                let deg = vh.deg.max(vl.deg);
-                let c = std::array::from_fn(|k| sign * (vh.c[k] - vl.c[k]));
-                let p = Poly::new(c, deg);
-                [(c[0] <= p.spread(1.0)).then_some(p), None]
+                // `sign (velocity(hi) - velocity(lo))`: the clusters above
+                // the structure's have quadratic velocities (`hi > lo`: only
+                // `lo` can be the structure's cluster).
+                let d = &sim.dynamics;
+                let upper = |c: usize| {
+                    [
+                        sim.v[d.bottom[c]],
+                        (d.accel_const[c] - self.ag0) * self.h,
+                        -0.5 * self.ag_rate * self.h * self.h,
+                    ]
+                };
+                let vh = upper(hi);
+                let p = &mut out[0];
+                if lo == 0 {
+                    for (ck, vk) in p.c.iter_mut().zip(&self.v.c) {
+                        *ck = sign * (0.0 - vk);
+                    }
+                    for k in 0..3 {
+                        p.c[k] = sign * (vh[k] - self.v.c[k]);
+                    }
+                    p.deg = self.v.deg.max(2);
+                } else {
+                    let vl = upper(lo);
+                    for k in 0..3 {
+                        p.c[k] = sign * (vh[k] - vl[k]);
+                    }
+                    p.deg = 2;
+                }
+                usize::from(p.c[0] <= p.spread(1.0))
             }
             Guard::Stuck {
                 mass_above,
@@ -235,10 +247,16 @@ impl Flow {
                 let (lo, hi) = Flow::stick_band(mass_above, f_top, cap);
                 let a0 = self.accel_start;
                 let (accel, spread) = self.accel();
-                [
-                    (a0 - spread <= lo).then(|| accel.affine(1.0, -lo)),
-                    (a0 + spread >= hi).then(|| accel.affine(-1.0, hi)),
-                ]
+                let mut n = 0;
+                if a0 - spread <= lo {
+                    out[n] = accel.affine(1.0, -lo);
+                    n += 1;
+                }
+                if a0 + spread >= hi {
+                    out[n] = accel.affine(-1.0, hi);
+                    n += 1;
+                }
+                n
             }
         }
     }
@@ -381,6 +399,7 @@ impl Simulator {
         let mut ifaces = d.changing_guards;
         let mut earliest: Option<(f64, usize)> = None;
         let mut at_once = 0u32;
+        let mut polys = [Poly::default(); 2];
         // Every stick of the structure's cluster at once: the acceleration
         // kept inside the band inside all of them (then each guard's own
         // test, on a wider band, returns no polynomial either).
@@ -397,7 +416,8 @@ impl Simulator {
             if flow.holds(self, g) {
                 continue;
             }
-            for poly in flow.guard_polys(self, g).iter().flatten() {
+            let n_polys = flow.guard_polys(self, g, &mut polys);
+            for poly in &polys[..n_polys] {
                 // A guard at zero (a contact that has just switched) must
                 // grow from it, or it fires at once.
                 let scale = poly.spread(1.0);
