@@ -101,9 +101,11 @@ struct Flow {
     accel_linear: [f64; 2],
     accel_start: f64,
     accel_spread_bound: f64,
-    /// Its polynomial and exact spread, built only where that bound does
-    /// not decide (most stretches need neither).
-    accel: std::cell::OnceCell<(Poly, f64)>,
+    /// Its polynomial and exact spread, built in place only where that
+    /// bound does not decide (most stretches need neither): `accel_built`.
+    accel_poly: Poly,
+    accel_spread: f64,
+    accel_built: bool,
     w2: f64,
     cm: f64,
     ag0: f64,
@@ -139,16 +141,17 @@ impl Flow {
         self.accel_start = p0 + ag0 - w2 * sim.u[0] - cm * sim.v[0];
         self.accel_spread_bound =
             (self.accel_linear[1] * h).abs() + w2 * self.u_spread + cm * self.v_spread;
-        self.accel = std::cell::OnceCell::new();
+        self.accel_built = false;
         (self.h, self.w2, self.cm, self.ag0, self.ag_rate) = (h, w2, cm, ag0, exc.ag_rate);
         (self.q0, self.p1) = (q0, p1);
     }
 
     /// The absolute acceleration `p - w2 u - cm v + ag` as a polynomial, and
     /// its spread.
-    fn accel(&self) -> &(Poly, f64) {
-        self.accel.get_or_init(|| {
-            let mut c = [0.0; N_COEF];
+    fn accel(&mut self) -> (&Poly, f64) {
+        if !self.accel_built {
+            let c = &mut self.accel_poly.c;
+            *c = [0.0; N_COEF];
             let (u, v) = (self.u.coefs(), self.v.coefs());
             for ((a, uk), vk) in c.iter_mut().zip(u).zip(v) {
                 *a = -self.w2 * uk - self.cm * vk;
@@ -156,10 +159,11 @@ impl Flow {
             let [a0, a1] = self.accel_linear;
             c[0] += a0;
             c[1] += a1 * self.h;
-            let p = Poly::new(c, self.u.deg);
-            let spread = p.spread(1.0);
-            (p, spread)
-        })
+            self.accel_poly.deg = self.u.deg;
+            self.accel_spread = self.accel_poly.spread(1.0);
+            self.accel_built = true;
+        }
+        (&self.accel_poly, self.accel_spread)
     }
 
     /// Whether the guard `g` is proved positive over the whole stretch
@@ -206,7 +210,7 @@ impl Flow {
     /// stick band has two sides) written to `out`, without a side proved
     /// positive over the stretch by its exact spread; returns how many
     /// (written in place: no array of options moved per guard).
-    fn guard_polys(&self, sim: &Simulator, g: &Guard, out: &mut [Poly; 2]) -> usize {
+    fn guard_polys(&mut self, sim: &Simulator, g: &Guard, out: &mut [Poly; 2]) -> usize {
         match *g {
             Guard::Slip { hi, lo, sign } => {
                 // `sign (velocity(hi) - velocity(lo))`: the clusters above
@@ -326,7 +330,7 @@ impl Simulator {
             let h = t1 - self.t;
             flow.start(self, exc, t_ref, h, deg);
             let tol = EVENT_TIME_TOL / h;
-            let next = match self.next_event(&flow, muted, tol) {
+            let next = match self.next_event(&mut flow, muted, tol) {
                 Ok(next) => next,
                 Err(Undecided) if depth == 0 => return self.fine_stretches(t1, piece),
                 Err(Undecided) if !ends_only => return self.split_stretch(t1, piece, depth),
@@ -353,7 +357,10 @@ impl Simulator {
                 }
                 Next::Event(event) => {
                     let s = event.map_or(1.0, |(s, _)| s);
-                    if self.take_exact(&flow, s, tol, muted, ends_only).is_err() {
+                    if self
+                        .take_exact(&mut flow, s, tol, muted, ends_only)
+                        .is_err()
+                    {
                         if depth == 0 {
                             return self.fine_stretches(t1, piece);
                         }
@@ -394,7 +401,7 @@ impl Simulator {
 
     /// The first zero over the stretch of `flow` among the guards of the
     /// mode that are not `muted`, or the guards to fire at once.
-    fn next_event(&self, flow: &Flow, muted: u32, tol: f64) -> Result<Next, Undecided> {
+    fn next_event(&self, flow: &mut Flow, muted: u32, tol: f64) -> Result<Next, Undecided> {
         let d = &self.dynamics;
         let mut ifaces = d.changing_guards;
         let mut earliest: Option<(f64, usize)> = None;
@@ -456,7 +463,7 @@ impl Simulator {
     /// a peak cannot be decided.
     fn take_exact(
         &mut self,
-        flow: &Flow,
+        flow: &mut Flow,
         s: f64,
         tol: f64,
         muted: u32,
@@ -491,7 +498,7 @@ impl Simulator {
             raise_peak_over(
                 &mut peak_a0,
                 accel,
-                [accel_end, *spread],
+                [accel_end, spread],
                 s,
                 peak_tol,
                 ends_only,
