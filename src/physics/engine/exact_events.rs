@@ -38,16 +38,26 @@ use crate::physics::mode::Guard;
 /// `z = [u, v, p, p']` as polynomials of degree `deg` in `s = τ / h`: the
 /// Taylor terms `(A h)^k z / k!`, whose u and v parts are the coefficients.
 fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, [u, v]: [&mut Poly; 2]) {
-    let mut y = z;
-    (u.c[0], v.c[0]) = (y[0], y[1]);
-    let terms = u.c[1..=deg]
+    // The forcing's part `[p, p']` is linear in time: after two terms its
+    // entries are `f · 0.0 = +0.0` (`f > 0`), left out of the rest (the
+    // same values: `0.0 - w2 u` is computed as before).
+    let [mut y0, mut y1, p, p_rate] = z;
+    (u.c[0], v.c[0]) = (y0, y1);
+    let f = h * INV[0];
+    let p1 = f * p_rate;
+    [y0, y1] = [f * y1, f * (p - w2 * y0 - cm * y1)];
+    (u.c[1], v.c[1]) = (y0, y1);
+    let f = h * INV[1];
+    [y0, y1] = [f * y1, f * (p1 - w2 * y0 - cm * y1)];
+    (u.c[2], v.c[2]) = (y0, y1);
+    let terms = u.c[3..=deg]
         .iter_mut()
-        .zip(&mut v.c[1..=deg])
-        .zip(&INV[..deg]);
+        .zip(&mut v.c[3..=deg])
+        .zip(&INV[2..deg]);
     for ((uk, vk), inv) in terms {
         let f = h * inv;
-        y = [f * y[1], f * (y[2] - w2 * y[0] - cm * y[1]), f * y[3], 0.0];
-        (*uk, *vk) = (y[0], y[1]);
+        [y0, y1] = [f * y1, f * (0.0 - w2 * y0 - cm * y1)];
+        (*uk, *vk) = (y0, y1);
     }
     (u.deg, v.deg) = (deg, deg);
 }
