@@ -55,37 +55,24 @@ impl Model {
         }
     }
 
-    /// Whether variable `id` belongs to the model.
+    /// Whether variable `id` belongs to the model: whether its table lists
+    /// it (the table is the one definition; its value references are kept
+    /// sorted once per model for the lookups of every get and set).
     pub fn has(self, id: Id) -> bool {
-        match self {
-            Model::Storey => !matches!(
-                id,
-                Id::M(_)
-                    | Id::SupportMobility
-                    | Id::FloorForce
-                    | Id::AttachedMass
-                    | Id::SlidingForce
-            ),
-            Model::Floor => !matches!(
-                id,
-                Id::Mp
-                    | Id::Tp
-                    | Id::Zeta
-                    | Id::MaxStep
-                    | Id::FrictionEps
-                    | Id::Alpha(_)
-                    | Id::Fext
-                    | Id::Up
-                    | Id::Vp
-                    | Id::ApAbs
-                    | Id::BaseShear
-                    | Id::PeakUp
-                    | Id::PeakApAbs
-                    | Id::Estrain
-                    | Id::Eviscous
-                    | Id::Solver
-            ),
-        }
+        static VRS: [std::sync::OnceLock<Vec<u32>>; 2] =
+            [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
+        let slot = match self {
+            Model::Storey => 0,
+            Model::Floor => 1,
+        };
+        VRS[slot]
+            .get_or_init(|| {
+                let mut vrs: Vec<u32> = self.table().iter().map(|v| v.id.vr()).collect();
+                vrs.sort_unstable();
+                vrs
+            })
+            .binary_search(&id.vr())
+            .is_ok()
     }
 
     /// The model's variable with value reference `vr`, if any.

@@ -316,13 +316,10 @@ impl Instance {
             (Ok(()), None) => {
                 // The inputs stand where their slopes took them: the outputs
                 // at the step's end see them there, and an input left alone
-                // is held at that value. (On a support, where the outputs
-                // see `ag`, exactly as the engine took it to the step's end
-                // without a record.)
-                self.d.ag = match self.model {
-                    Model::Floor => self.d.ag + self.d.der_ag * (sim_end - sim_time),
-                    Model::Storey => ag_end,
-                };
+                // is held at that value: `ag` as the engine took its input
+                // part to the step's end (a support's outputs see it), `Fext`
+                // as the engine ended the step.
+                self.d.ag = self.d.ag + self.d.der_ag * (sim_end - sim_time);
                 self.d.fext = if check_scalar("Fext", fext_engine).is_ok() {
                     fext_engine
                 } else {
