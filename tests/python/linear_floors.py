@@ -13,6 +13,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from sll.cosim import ConfigurationError, Partner
+from sll.coupling import shear_building
 
 
 class LinearFloors(Partner):
@@ -27,19 +28,11 @@ class LinearFloors(Partner):
         self.c = np.asarray(dampings, float)
         self.n = len(self.m0)
         self.tg, self.ag_rec = (np.asarray(v, float) for v in ground)
-        self.K, self.C = self._matrix(self.k), self._matrix(self.c)
+        # The shear building's matrices, as the storey chain's exact reference builds them.
+        _, self.C, self.K = shear_building(
+            [{"m": m, "k": k, "c": c} for m, k, c in zip(self.m0, self.k, self.c)])
         self.cache: dict = {}
         self.start()
-
-    def _matrix(self, values):
-        n, a = self.n, np.zeros((self.n, self.n))
-        for i, val in enumerate(values):
-            a[i, i] += val
-            if i > 0:
-                a[i - 1, i - 1] += val
-                a[i, i - 1] -= val
-                a[i - 1, i] -= val
-        return a
 
     def start(self, t0: float = 0.0, stop: float | None = None):
         self.t = t0
