@@ -3,8 +3,13 @@
 //! body below, under ground acceleration (see `shared/MODEL.md`), exported
 //! as an FMI 2.0 and an FMI 3.0 Co-Simulation FMU (one library for both).
 //!
-//! Rooms, each using only the ones listed before it:
-//! - [`physics`]: the scene, stick/slip modes, the integrators.
+//! Rooms, each using only the ones listed before it (but for `physics`
+//! reaching [`baselines`] through its solver choice and the step-end branch
+//! of its stepping loop):
+//! - [`physics`]: the scene, stick/slip modes, the exact default.
+//! - [`baselines`]: the RK4 baselines the charts compare against (the
+//!   paper's step-end RK4, tanh-regularized friction), apart from the
+//!   default and never entered by it.
 //! - [`ground`]: ground-motion records and driving a simulation through one.
 //! - [`fmi`]: the FMU (instance state machine, variables, C API).
 //! - [`batch`]: `sllRunBatch`, many parameter sets over one record in one
@@ -15,6 +20,7 @@
 
 #![warn(missing_docs)]
 
+pub mod baselines;
 pub mod batch;
 pub mod fmi;
 pub mod ground;

@@ -823,7 +823,7 @@ fn bad_scenes_and_inputs_are_refused_by_name() {
         Err(SimError::NoForceOnSupport { .. })
     ));
     // The regularized baseline has no prescribed support.
-    let e = stacked_live_load::physics::regularized::RegularizedSimulator::new(&p, 1e-3, 1e-4)
+    let e = stacked_live_load::baselines::regularized::RegularizedSimulator::new(&p, 1e-3, 1e-4)
         .unwrap_err();
     assert_eq!(e.field, "support");
 }

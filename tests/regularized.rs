@@ -3,8 +3,8 @@
 
 mod common;
 use common::*;
+use stacked_live_load::baselines::regularized::{self, RegularizedSimulator};
 use stacked_live_load::ground::record;
-use stacked_live_load::physics::regularized::{self, RegularizedSimulator};
 use stacked_live_load::*;
 use std::f64::consts::PI;
 
@@ -127,7 +127,7 @@ fn solver_3_steps_within_the_stability_bound_of_the_whole_stack() {
     // `Solver` (the FMU's solver 3) the step now follows the stiffest mode.
     // Tolerance: 1e-5 of the input energy (docs/robustness.md); the
     // residual is the baseline's own RK4 error (worst measured 2.1e-6).
-    use stacked_live_load::physics::regularized::stable_step;
+    use stacked_live_load::baselines::regularized::stable_step;
     use stacked_live_load::physics::solver::{Solver, SolverKind};
     use stacked_live_load::physics::system::System;
     let records = [

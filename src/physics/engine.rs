@@ -18,9 +18,12 @@
 //! driver: substeps on the exact map of `exact_map`, proved free of
 //! switches by `proofs`), `exact_events` (the default's other substeps:
 //! switches located on the exact motion, with the polynomials of `poly`),
-//! `structure_rk4` (the baseline's RK4 step), `events` (guards, firing,
-//! resolution, the baseline's step), `report` (outputs, counters, errors),
-//! `saved_state` and `state_check` (saved states and their validation).
+//! `bodies` (the clusters above the structure's, moving every body with its
+//! cluster), `events` (guards, firing, resolution), `report` (outputs,
+//! counters, errors), `saved_state` and `state_check` (saved states and
+//! their validation). The RK4 baseline's step lives apart, in
+//! `crate::baselines::step_end`: the `Method::StepEnd` branch of the
+//! stepping loop is its only caller.
 
 use crate::limits::{SWITCH_WORK, TRY_WORK};
 use crate::physics::hermite;
@@ -31,6 +34,7 @@ use crate::physics::params::{
 use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::physics::system::System;
 
+mod bodies;
 mod events;
 mod exact_events;
 mod exact_map;
@@ -40,9 +44,9 @@ mod proofs;
 mod report;
 mod saved_state;
 mod state_check;
-mod structure_rk4;
 mod sweep;
 
+pub(crate) use bodies::{move_bodies, upper_cluster_step};
 use pieces::Piece;
 pub use pieces::{
     auto_step, same_up_to_rounding, substeps, Excitation, PieceSource, Plain, ACCURATE_H_OMEGA,
@@ -51,13 +55,16 @@ pub use pieces::{
 };
 pub use proofs::PRESCRIBED_MAX_STEP;
 pub use report::{Outputs, SimError, Stats};
-use structure_rk4::{move_bodies, upper_cluster_step, Structure, StructureRk4};
 
 /// The simulator: one scene, its state, peaks and energy terms.
+///
+/// The `pub(crate)` fields are the ones the step-end baseline
+/// (`crate::baselines::step_end`) reads and writes: `sys`, `t`, `u`, `v`,
+/// `dynamics`, `e_input`, `e_viscous`, `e_friction`, the peaks and `stats`.
 #[derive(Clone, Debug)]
 pub struct Simulator {
     params: Params,
-    sys: System,
+    pub(crate) sys: System,
     settings: Settings,
     /// Largest internal step: the exact default's longest substep, or the
     /// step of the RK4 baseline (solver 2).
@@ -72,17 +79,17 @@ pub struct Simulator {
     maps: exact_map::MapCache,
     /// Dynamics of the modes met (derived data only, as `maps`).
     dyn_cache: events::DynamicsCache,
-    t: f64,
-    u: [f64; MAX_BODIES],
-    v: [f64; MAX_BODIES],
-    e_input: f64,
-    e_viscous: f64,
-    e_friction: [f64; MAX_BODIES],
+    pub(crate) t: f64,
+    pub(crate) u: [f64; MAX_BODIES],
+    pub(crate) v: [f64; MAX_BODIES],
+    pub(crate) e_input: f64,
+    pub(crate) e_viscous: f64,
+    pub(crate) e_friction: [f64; MAX_BODIES],
     mode: Mode,
-    dynamics: Dynamics,
-    peak_u0: f64,
-    peak_slip: [f64; MAX_BODIES],
-    peak_a0: f64,
+    pub(crate) dynamics: Dynamics,
+    pub(crate) peak_u0: f64,
+    pub(crate) peak_slip: [f64; MAX_BODIES],
+    pub(crate) peak_a0: f64,
     ag_now: f64,
     fext_now: f64,
     last_event: f64,
@@ -90,7 +97,7 @@ pub struct Simulator {
     watch_from: f64,
     /// The first switch at or after `watch_from` (NaN: none yet).
     first_switch: f64,
-    stats: Stats,
+    pub(crate) stats: Stats,
     /// Assignments the mode resolver tried (its work; not saved).
     tries: u64,
     /// `advance*` stop with [`SimError::WorkLimit`] once [`Simulator::work`]
@@ -392,6 +399,7 @@ impl Simulator {
                     piece.i += 1;
                     self.check_work()?;
                 },
+                // The baseline (`crate::baselines::step_end`).
                 Method::StepEnd => {
                     for i in 1..=piece.n {
                         self.step_switch_at_end(piece.end_of(i), &exc, piece.t_ref);
@@ -471,50 +479,11 @@ impl Simulator {
         (self.ag_now, self.fext_now) = piece.exc.at(piece.t_end - piece.t_ref);
     }
 
-    /// Takes the step of length `h` that ends with the structure's cluster at
-    /// `x1`: moves every body with its cluster, adds the work terms, and raises
-    /// the peaks to the largest value of the cubic between the step ends.
-    fn accept(&mut self, x1: &Structure, h: f64, exc: &Excitation, t_ref: f64) {
-        let n = self.sys.n;
-        let (mut du, mut v_end) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
-        du[0] = x1[0] - self.u[0];
-        v_end[0] = x1[1];
-        // Clusters above the structure's: exact polynomials in time (what RK4
-        // gives them), and Simpson's rule, exact, for their input work.
-        let mut upper_work = 0.0;
-        let d = &self.dynamics;
-        let ag0 = exc.at(self.t - t_ref).0;
-        for c in 1..d.n_clusters {
-            let v = self.v[d.bottom[c]];
-            let [dc, vc, work] =
-                upper_cluster_step(v, d.accel_const[c], d.mass[c], ag0, exc.ag_rate, h);
-            (du[c], v_end[c]) = (dc, vc);
-            upper_work += work;
-        }
-        let rk = StructureRk4::new(&self.sys, d, exc, t_ref);
-        let (a0_start, jerk_start) = rk.accel_and_jerk(self.t, self.u[0], self.v[0]);
-        let (u0_start, v0_start) = (self.u[0], self.v[0]);
-        let d = &self.dynamics;
-        for j in 1..=n {
-            let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
-            if hi != lo {
-                let slip0 = self.u[j] - self.u[j - 1];
-                let increment = du[hi] - du[lo];
-                let (vrel0, vrel1) = (self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]);
-                self.e_friction[j] -= d.slip_force[j] * increment;
-                let peak = &mut self.peak_slip[j];
-                hermite::raise_peak(peak, slip0, vrel0, slip0 + increment, vrel1, h);
-            }
-        }
-        move_bodies(&mut self.u, &mut self.v, d, n, x1[0], &du, &v_end);
-        self.e_input += x1[2] + upper_work;
-        self.e_viscous += x1[3];
-        self.t += h;
-        self.stats.steps += 1;
-
-        let (a0_end, jerk_end) = rk.accel_and_jerk(self.t, self.u[0], self.v[0]);
-        hermite::raise_peak(&mut self.peak_u0, u0_start, v0_start, x1[0], x1[1], h);
-        hermite::raise_peak(&mut self.peak_a0, a0_start, jerk_start, a0_end, jerk_end, h);
+    /// For the step-end baseline (`crate::baselines::step_end`) at a
+    /// step's end: every violated guard switches there.
+    pub(crate) fn fire_all_violated(&mut self, exc: &Excitation, t_ref: f64) {
+        let all = self.all_interfaces();
+        self.fire_violated(exc, t_ref, all, 0);
     }
 
     /// The structure cluster's load now ([`Dynamics::load0`]).

@@ -5,10 +5,9 @@
 //! - [`system`]: masses, stiffness, damping and normal forces.
 //! - [`mode`]: stick/slip modes, their reduced dynamics, and the resolution
 //!   of a consistent mode at an instant.
-//! - [`engine`]: the exact default and RK4 with located events; peaks and
-//!   energies.
+//! - [`engine`]: the exact default (and the stepping loop the step-end RK4
+//!   baseline of [`crate::baselines`] shares); peaks and energies.
 //! - [`hermite`]: peaks between steps from the cubic Hermite interpolant.
-//! - [`regularized`]: tanh-regularized friction with plain RK4, a baseline.
 //! - [`solver`]: the FMU's three solver choices behind one type.
 //! - [`snapshot`]: the byte format of saved states.
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
@@ -17,7 +16,6 @@ pub mod engine;
 pub mod hermite;
 pub mod mode;
 pub mod params;
-pub mod regularized;
 pub mod sdof;
 pub mod snapshot;
 pub mod solver;

@@ -2,9 +2,9 @@
 //! scene. 1 and 2 are the exact stick/slip engine with located or step-end
 //! switching; 3 is the tanh-regularized baseline (not a recommended mode).
 
+use crate::baselines::regularized::{self, RegularizedSimulator};
 use crate::physics::engine::{self, Excitation, Outputs, PieceSource, SimError, Simulator};
 use crate::physics::params::{check_scalar, Method, ParamError, Params, Settings, MIN_MAX_STEP};
-use crate::physics::regularized::{self, RegularizedSimulator};
 use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use crate::physics::system::System;
 

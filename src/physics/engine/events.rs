@@ -256,17 +256,6 @@ impl Simulator {
             self.fire_violated(exc, t_ref, muted, 0);
         }
     }
-
-    /// One internal step to `t1` switching modes only at its end (baseline).
-    pub(super) fn step_switch_at_end(&mut self, t1: f64, exc: &Excitation, t_ref: f64) {
-        let h = t1 - self.t;
-        let rk = StructureRk4::new(&self.sys, &self.dynamics, exc, t_ref);
-        let x1 = rk.step(self.t, self.u[0], self.v[0], h);
-        self.accept(&x1, h, exc, t_ref);
-        self.t = t1;
-        let all = self.all_interfaces();
-        self.fire_violated(exc, t_ref, all, 0);
-    }
 }
 
 /// The dynamics of the modes met so far: a switch back to a mode copies

@@ -1,0 +1,55 @@
+//! The exact step of the clusters above the structure's, and moving every
+//! body with its cluster: the default's (`exact_events`, `sweep`), also
+//! used by the step-end baseline (`crate::baselines::step_end`).
+
+use super::*;
+
+/// A cluster above the structure's over a step of length `h`: its absolute
+/// acceleration is constant in the mode, so RK4 gives it exactly its Taylor
+/// polynomial, and Simpson's rule, exact for it, its input work. Returns
+/// (displacement increment, end velocity, input work) from velocity `v`.
+#[inline]
+pub(crate) fn upper_cluster_step(
+    v: f64,
+    accel: f64,
+    mass: f64,
+    ag0: f64,
+    ag_rate: f64,
+    h: f64,
+) -> [f64; 3] {
+    let rel = accel - ag0;
+    let vm = v + 0.5 * h * rel - 0.125 * h * h * ag_rate;
+    let v_end = v + h * rel - 0.5 * h * h * ag_rate;
+    const SIXTH: f64 = 1.0 / 6.0;
+    let du = h * (v + h * (0.5 * rel - h * ag_rate * SIXTH));
+    let (agm, ag1) = (ag0 + 0.5 * h * ag_rate, ag0 + h * ag_rate);
+    let work = -mass * h * SIXTH * (ag0 * v + 4.0 * agm * vm + ag1 * v_end);
+    [du, v_end, work]
+}
+
+/// Moves every body with its cluster: the structure to `u0`, the other
+/// bodies of its cluster by keeping their offset from it (so a body stuck
+/// at zero slip stays at exactly zero slip), those of the other clusters by
+/// their cluster's displacement increment `du[c]`; velocities to `v[c]`.
+pub(crate) fn move_bodies(
+    u: &mut [f64; MAX_BODIES],
+    v: &mut [f64; MAX_BODIES],
+    d: &Dynamics,
+    n: usize,
+    u0: f64,
+    du: &[f64; MAX_BODIES],
+    v_cluster: &[f64; MAX_BODIES],
+) {
+    let u0_before = u[0];
+    u[0] = u0;
+    v[0] = v_cluster[0];
+    for i in 1..=n {
+        let c = d.cluster_of[i];
+        u[i] = if c == 0 {
+            u0 + (u[i] - u0_before)
+        } else {
+            u[i] + du[c]
+        };
+        v[i] = v_cluster[c];
+    }
+}
