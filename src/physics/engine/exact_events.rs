@@ -32,7 +32,7 @@
 use super::exact_map::degree;
 use super::poly::*;
 use super::*;
-use crate::physics::mode::Guard;
+use crate::physics::mode::{Guard, Moving};
 
 /// `u` and `v` of the structure's cluster over a stretch of length `h` from
 /// `z = [u, v, p, p']` as polynomials of degree `deg` in `s = τ / h`: the
@@ -534,30 +534,13 @@ impl Simulator {
             let watched = d.changing_guards & !muted & (1 << j) != 0;
             if watched && self.mode.contact[j] != Contact::Free {
                 peak_slip[j] = peak_slip[j].max(slip0.abs()).max(slip1.abs());
-            } else if lo == 0 {
-                // slip(s) = slip0 + (cluster hi's displacement) - (u0(s) - u0(0)).
-                let (h, rel) = (flow.h, d.accel_const[hi] - flow.ag0);
-                let upper = [
-                    self.v[d.bottom[hi]] * h,
-                    0.5 * rel * h * h,
-                    -flow.ag_rate * h * h * h / 6.0,
-                ];
-                let spread = flow.u_spread + upper.iter().map(|x| x.abs()).sum::<f64>();
-                if slip0.abs().max(slip1.abs()) > peak_slip[j]
-                    || slip0.abs() + spread > peak_slip[j]
-                {
-                    let mut c = flow.u.c.map(|x| -x);
-                    c[0] = slip0;
-                    for k in 0..3 {
-                        c[k + 1] += upper[k];
-                    }
-                    let slip = Poly::new(c, flow.u.deg.max(3));
-                    let ends = [slip1, spread];
-                    raise_peak_over(&mut peak_slip[j], &slip, ends, s, peak_tol, ends_only)?;
-                }
             } else {
-                let (vrel0, vrel1) = (self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]);
-                hermite::raise_peak(&mut peak_slip[j], slip0, vrel0, slip1, vrel1, tau);
+                let ends = [
+                    [slip0, slip1],
+                    [self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]],
+                ];
+                let peak = &mut peak_slip[j];
+                self.raise_unwatched_slip(peak, flow, *m, ends, [s, peak_tol], ends_only)?;
             }
         }
 
@@ -584,6 +567,47 @@ impl Simulator {
         self.peak_slip = peak_slip;
         self.t += tau;
         self.stats.steps += 1;
+        Ok(())
+    }
+    /// The peak of a slip whose guard was not searched over the stretch
+    /// (muted, or a free interface), up to `s`: `ends` are its slip and
+    /// relative velocity at both ends. Out of line: most stretches watch
+    /// every slip (its peak is then at an end), and the event path's code
+    /// stays small.
+    #[cold]
+    #[inline(never)]
+    fn raise_unwatched_slip(
+        &self,
+        peak: &mut f64,
+        flow: &Flow,
+        m: Moving,
+        [[slip0, slip1], [vrel0, vrel1]]: [[f64; 2]; 2],
+        [s, peak_tol]: [f64; 2],
+        ends_only: bool,
+    ) -> Result<(), Undecided> {
+        let (d, hi) = (&self.dynamics, m.hi);
+        if m.lo == 0 {
+            // slip(s) = slip0 + (cluster hi's displacement) - (u0(s) - u0(0)).
+            let (h, rel) = (flow.h, d.accel_const[hi] - flow.ag0);
+            let upper = [
+                self.v[d.bottom[hi]] * h,
+                0.5 * rel * h * h,
+                -flow.ag_rate * h * h * h / 6.0,
+            ];
+            let spread = flow.u_spread + upper.iter().map(|x| x.abs()).sum::<f64>();
+            if slip0.abs().max(slip1.abs()) > *peak || slip0.abs() + spread > *peak {
+                let mut c = flow.u.c.map(|x| -x);
+                c[0] = slip0;
+                for k in 0..3 {
+                    c[k + 1] += upper[k];
+                }
+                let slip = Poly::new(c, flow.u.deg.max(3));
+                raise_peak_over(peak, &slip, [slip1, spread], s, peak_tol, ends_only)?;
+            }
+        } else {
+            let tau = if s >= 1.0 { flow.h } else { s * flow.h };
+            hermite::raise_peak(peak, slip0, vrel0, slip1, vrel1, tau);
+        }
         Ok(())
     }
 }

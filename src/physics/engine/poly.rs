@@ -205,6 +205,7 @@ fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f
 /// the value at `e`), or where `y'` changes sign. `spread` bounds
 /// `|y - y(0)|` over `[0, 1]` (`Poly::spread`): when it keeps `|y|` below
 /// the peak, nothing else is computed.
+#[inline]
 pub(super) fn raise_peak_exact(
     peak: &mut f64,
     y: &Poly,
@@ -219,6 +220,14 @@ pub(super) fn raise_peak_exact(
     if y.c[0].abs() + spread <= *peak || y.c[0].abs() + y.spread(e) <= *peak {
         return Ok(());
     }
+    raise_peak_inside(peak, y, e, tol)
+}
+
+/// [`raise_peak_exact`] where its bounds leave an interior peak possible:
+/// out of line, so that the usual case (the bounds decide) is a few
+/// instructions at its callers.
+#[inline(never)]
+fn raise_peak_inside(peak: &mut f64, y: &Poly, e: f64, tol: f64) -> Result<(), Undecided> {
     let dy = y.derivative();
     let dy_spread = dy.spread(e);
     if dy.c[0].abs() > dy_spread {
