@@ -698,6 +698,13 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     if let Some(res) = resolve_most_stuck(sys, req) {
         return res;
     }
+    resolve_by_walk(sys, req)
+}
+
+/// [`resolve`] where [`resolve_most_stuck`] does not decide: the walk (out
+/// of line, so that the usual switch runs through compact code).
+#[inline(never)]
+fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     let walk = Walk::new(sys, req);
     let mut search = Search {
         best: None,

@@ -306,6 +306,14 @@ impl DynamicsCache {
             *out = self.dynamics[i];
             return;
         }
+        self.insert(key, sys, mode, out);
+    }
+
+    /// A mode met for the first time: its dynamics built, kept and copied
+    /// to `out` (out of line: a few dozen times per run).
+    #[cold]
+    #[inline(never)]
+    fn insert(&mut self, key: u32, sys: &System, mode: &Mode, out: &mut Dynamics) {
         let d = Dynamics::new(sys, mode);
         *out = d;
         if self.keys.len() < DYNAMICS_CACHE_SIZE {

@@ -389,6 +389,8 @@ impl Simulator {
     }
 
     /// The rest of a substep to `t1` in equal stretches of at most `h_fine`.
+    #[cold]
+    #[inline(never)]
     fn fine_stretches(&mut self, t1: f64, piece: &Piece) {
         let t0 = self.t;
         let n = substeps(t1 - t0, self.h_fine) as usize;
@@ -403,6 +405,8 @@ impl Simulator {
     }
 
     /// The stretch to `t1` in two halves, one level deeper.
+    #[cold]
+    #[inline(never)]
     fn split_stretch(&mut self, t1: f64, piece: &Piece, depth: u32) {
         let mid = self.t + 0.5 * (t1 - self.t);
         self.exact_stretch(mid, piece, depth + 1);
