@@ -317,6 +317,12 @@ impl DynamicsCache {
         let d = Dynamics::new(sys, mode);
         *out = d;
         if self.keys.len() < DYNAMICS_CACHE_SIZE {
+            if self.keys.is_empty() {
+                // Room for every entry at once: a growing vector would copy
+                // the dynamics kept so far at each doubling.
+                self.keys.reserve_exact(DYNAMICS_CACHE_SIZE);
+                self.dynamics.reserve_exact(DYNAMICS_CACHE_SIZE);
+            }
             self.keys.push(key);
             self.dynamics.push(d);
         } else {
