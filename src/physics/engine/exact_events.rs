@@ -29,7 +29,6 @@
 //! (`ω h <= 0.01`), where the contact is muted for one stretch only and an
 //! undecided search halves the stretch.
 
-use super::exact_map::degree;
 use super::poly::*;
 use super::*;
 use crate::physics::mode::{Guard, Moving};
@@ -326,15 +325,8 @@ impl Simulator {
         let mut muted: u32 = 0;
         let mut fired_at_once: u32 = 0;
         let mut events = 0;
-        // One degree for every stretch: that of the longest, at the bare
-        // structure's rates (the highest of any mode).
-        let sys = &self.sys;
-        let deg = if sys.prescribed() {
-            degree(t1 - self.t, 0.0, 0.0)
-        } else {
-            let inv_mass = 1.0 / sys.mass[0];
-            degree(t1 - self.t, sys.k * inv_mass, sys.c * inv_mass)
-        };
+        // One degree for every stretch: that of the longest.
+        let deg = self.maps.stretch_degree(&self.sys, t1 - self.t);
         let mut flow = Flow::default();
         while self.t < t1 {
             let h = t1 - self.t;

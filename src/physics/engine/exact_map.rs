@@ -244,6 +244,9 @@ pub(super) struct MapCache {
     next: usize,
     /// The map found last.
     last: usize,
+    /// The last stretch length asked of [`MapCache::stretch_degree`] (its
+    /// bits) and its degree: most substeps have the same length.
+    last_degree: Option<(u64, usize)>,
 }
 
 /// How many maps are kept (then the oldest is replaced).
@@ -266,6 +269,11 @@ impl MapCache {
         }
         let map = ExactMap::new(sys, mass, h);
         self.last = if self.maps.len() < CACHE_SIZE {
+            if self.maps.is_empty() {
+                // Room for every map at once (no copies as the vector grows).
+                self.maps.reserve_exact(CACHE_SIZE);
+                self.keys.reserve_exact(CACHE_SIZE);
+            }
             self.maps.push(map);
             self.keys.push(key);
             self.maps.len() - 1
@@ -281,6 +289,25 @@ impl MapCache {
 
     pub(super) fn get(&self, i: usize) -> &ExactMap {
         &self.maps[i]
+    }
+
+    /// The degree of the event path's Taylor polynomials over a stretch of
+    /// length `h`: [`degree`] at the bare structure's rates (the highest of
+    /// any mode), remembered for the last length asked.
+    pub(super) fn stretch_degree(&mut self, sys: &System, h: f64) -> usize {
+        if let Some((bits, deg)) = self.last_degree {
+            if bits == h.to_bits() {
+                return deg;
+            }
+        }
+        let deg = if sys.prescribed() {
+            degree(h, 0.0, 0.0)
+        } else {
+            let inv_mass = 1.0 / sys.mass[0];
+            degree(h, sys.k * inv_mass, sys.c * inv_mass)
+        };
+        self.last_degree = Some((h.to_bits(), deg));
+        deg
     }
 }
 
