@@ -328,11 +328,13 @@ impl Simulator {
         // One degree for every stretch: that of the longest.
         let deg = self.maps.stretch_degree(&self.sys, t1 - self.t);
         let mut flow = Flow::default();
+        // The guards' polynomials of every stretch, written in place.
+        let mut polys = [Poly::default(); 2];
         while self.t < t1 {
             let h = t1 - self.t;
             flow.start(self, exc, t_ref, h, deg);
             let tol = EVENT_TIME_TOL / h;
-            let next = match self.next_event(&mut flow, muted, tol) {
+            let next = match self.next_event(&mut flow, &mut polys, muted, tol) {
                 Ok(next) => next,
                 Err(Undecided) if depth == 0 => return self.fine_stretches(t1, piece),
                 Err(Undecided) if !ends_only => return self.split_stretch(t1, piece, depth),
@@ -407,12 +409,17 @@ impl Simulator {
 
     /// The first zero over the stretch of `flow` among the guards of the
     /// mode that are not `muted`, or the guards to fire at once.
-    fn next_event(&self, flow: &mut Flow, muted: u32, tol: f64) -> Result<Next, Undecided> {
+    fn next_event(
+        &self,
+        flow: &mut Flow,
+        polys: &mut [Poly; 2],
+        muted: u32,
+        tol: f64,
+    ) -> Result<Next, Undecided> {
         let d = &self.dynamics;
         let mut ifaces = d.changing_guards;
         let mut earliest: Option<(f64, usize)> = None;
         let mut at_once = 0u32;
-        let mut polys = [Poly::default(); 2];
         // Every stick of the structure's cluster at once: the acceleration
         // kept inside the band inside all of them (then each guard's own
         // test, on a wider band, returns no polynomial either).
@@ -429,7 +436,7 @@ impl Simulator {
             if flow.holds(self, g) {
                 continue;
             }
-            let n_polys = flow.guard_polys(self, g, &mut polys);
+            let n_polys = flow.guard_polys(self, g, polys);
             for poly in &polys[..n_polys] {
                 // A guard at zero (a contact that has just switched) must
                 // grow from it, or it fires at once.
