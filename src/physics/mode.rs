@@ -438,6 +438,7 @@ impl Dynamics {
     }
 
     /// Friction force of interface j (force of body j-1 on body j).
+    #[inline]
     pub fn force(&self, j: usize, mode: &Mode, load0: f64) -> f64 {
         let (mass_above, f_top) = self.force_affine(j, mode);
         if mode.is_stuck(j) {
@@ -451,6 +452,7 @@ impl Dynamics {
     /// its upper body's cluster: for a stuck interface the bodies j..=top move
     /// with the cluster, so F_j = M_above A + F_{top+1}; a slipping or free
     /// one carries its constant friction force (a = 0).
+    #[inline]
     pub fn force_affine(&self, j: usize, mode: &Mode) -> (f64, f64) {
         if mode.is_stuck(j) {
             let above = self.top[self.cluster_of[j]] + 1;

@@ -18,7 +18,7 @@ impl Simulator {
 
     /// Every interface of the stack (bit j).
     pub(super) fn all_interfaces(&self) -> u32 {
-        (1..=self.sys.n).fold(0, |m, j| m | (1 << j))
+        (2u32 << self.sys.n) - 2
     }
 
     pub(super) fn stuck_mask(&self) -> u32 {
@@ -107,29 +107,26 @@ impl Simulator {
         (self.ag_now, self.fext_now) = exc.at(self.t - t_ref);
     }
 
-    /// Guards of the current mode at the current state and inputs
-    /// (infinite for free interfaces and for j > n): positive while a
-    /// contact state holds. A stick's carries the resolver's consistency
-    /// slack ([`mode::stick_capacity`]), so that a stick it accepted starts
-    /// with a guard >= 0 (in a stack with equal friction a block riding on a
-    /// sliding one has |F| = mus N exactly; rounding alone would chatter).
-    pub(super) fn guards_now(&self) -> [f64; MAX_BODIES] {
-        let load0 = self.load0();
-        let mut g = [f64::INFINITY; MAX_BODIES];
-        for (j, gj) in g.iter_mut().enumerate().take(self.sys.n + 1).skip(1) {
-            let c = self.mode.contact[j];
-            *gj = match c {
-                Contact::Stuck => {
-                    let f = self.dynamics.force(j, &self.mode, load0);
-                    mode::stick_capacity(&self.sys, j) - f.abs()
-                }
-                Contact::SlipForward | Contact::SlipBackward => {
-                    c.slip_sign() * (self.v[j] - self.v[j - 1])
-                }
-                Contact::Free => f64::INFINITY,
-            };
+    /// The guard of interface `j` in the current mode at the current state
+    /// and inputs (`load0`, [`Simulator::load0`]; infinite for a free
+    /// interface): positive while its contact state holds. A stick's
+    /// carries the resolver's consistency slack ([`mode::stick_capacity`]),
+    /// so that a stick it accepted starts with a guard >= 0 (in a stack with
+    /// equal friction a block riding on a sliding one has |F| = mus N
+    /// exactly; rounding alone would chatter).
+    #[inline]
+    fn guard_now(&self, j: usize, load0: f64) -> f64 {
+        let c = self.mode.contact[j];
+        match c {
+            Contact::Stuck => {
+                let f = self.dynamics.force(j, &self.mode, load0);
+                mode::stick_capacity(&self.sys, j) - f.abs()
+            }
+            Contact::SlipForward | Contact::SlipBackward => {
+                c.slip_sign() * (self.v[j] - self.v[j - 1])
+            }
+            Contact::Free => f64::INFINITY,
         }
-        g
     }
 
     /// The guards that may fire at a jump of the inputs to `exc` now: all,
@@ -210,10 +207,15 @@ impl Simulator {
         forced: u32,
     ) -> bool {
         self.take_inputs_now(exc, t_ref);
-        let g = self.guards_now();
+        let load0 = self.load0();
         let (mut slip_zeroed, mut must_break) = (0, 0);
-        for j in 1..=self.sys.n {
-            let hit = forced & (1 << j) != 0 || (candidates & (1 << j) != 0 && g[j] <= 0.0);
+        // Only the interfaces asked about: a guard is computed where it
+        // decides (not for a forced one).
+        let mut asked = (forced | candidates) & self.all_interfaces();
+        while asked != 0 {
+            let j = asked.trailing_zeros() as usize;
+            asked &= asked - 1;
+            let hit = forced & (1 << j) != 0 || self.guard_now(j, load0) <= 0.0;
             if hit {
                 match self.mode.contact[j] {
                     Contact::Stuck => must_break |= 1 << j,
