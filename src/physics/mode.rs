@@ -219,13 +219,13 @@ impl Dynamics {
     /// interfaces.
     pub fn new(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics::clusters(sys, mode);
-        for j in 1..=sys.n {
+        for j in 1..sys.n + 1 {
             let constant = mode.is_stuck(j) && d.cluster_of[j] != 0;
             if !sys.is_free(j) && !constant {
                 d.changing_guards |= 1 << j;
             }
         }
-        for j in 1..=sys.n {
+        for j in 1..sys.n + 1 {
             let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
             if hi != lo {
                 d.moving[d.n_moving] = Moving { j, hi, lo };
@@ -292,7 +292,7 @@ impl Dynamics {
             stick_band: None,
             slip_sign: [0.0; MAX_BODIES],
         };
-        for i in 0..=sys.n {
+        for i in 0..sys.n + 1 {
             if i == 0 || !mode.is_stuck(i) {
                 d.n_clusters += 1;
                 d.bottom[d.n_clusters - 1] = i;
@@ -302,7 +302,7 @@ impl Dynamics {
             d.top[c] = i;
             d.mass[c] += sys.mass[i];
         }
-        for j in 1..=sys.n {
+        for j in 1..sys.n + 1 {
             let f = -sys.muk[j] * sys.normal[j] * mode.contact[j].slip_sign();
             d.slip_force[j] = f;
             if !mode.is_stuck(j) {
@@ -332,7 +332,7 @@ impl Dynamics {
         }
         for c in 0..d.n_clusters {
             let mut above = 0.0;
-            for j in (d.bottom[c]..=d.top[c]).rev() {
+            for j in (d.bottom[c]..d.top[c] + 1).rev() {
                 above += sys.mass[j];
                 d.mass_above[j] = above;
             }
@@ -529,7 +529,7 @@ pub fn stick_capacity(sys: &System, j: usize) -> f64 {
 pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
     let zero = zero & !free_mask(sys);
     let (mut worst, mut bottom, mut accel_below) = (f64::NEG_INFINITY, 0, 0.0);
-    for end in 1..=sys.n + 1 {
+    for end in 1..sys.n + 2 {
         if end <= sys.n && mode.is_stuck(end) {
             continue;
         }
@@ -548,7 +548,9 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
 /// acceleration) and stopping at the first that breaks the law.
 fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     let (mut bottom, mut accel_below) = (0, 0.0);
-    for end in 1..=sys.n + 1 {
+    // (Half-open ranges in the resolution: an inclusive range's iterator
+    // tests an extra flag at every step.)
+    for end in 1..sys.n + 2 {
         if end <= sys.n && mode.is_stuck(end) {
             continue;
         }
@@ -568,7 +570,7 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
 
 /// Interfaces (bit j) that carry no friction.
 fn free_mask(sys: &System) -> u32 {
-    (1..=sys.n)
+    (1..sys.n + 1)
         .filter(|&j| sys.is_free(j))
         .fold(0, |m, j| m | (1 << j))
 }
@@ -636,7 +638,7 @@ fn cluster_law(
 /// it: only its sign is used, to order the walk's options.
 fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
     let bottom = (1..j).rev().find(|&i| !mode.is_stuck(i)).unwrap_or(0);
-    let end = (j + 1..=sys.n)
+    let end = (j + 1..sys.n + 1)
         .find(|&i| !mode.is_stuck(i))
         .unwrap_or(sys.n + 1);
     let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0);
@@ -757,7 +759,7 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
     let mut equal = true;
-    for j in 1..=sys.n {
+    for j in 1..sys.n + 1 {
         if zero & (1 << j) != 0 {
             equal &= sys.mus[j] == sys.muk[j];
         }
@@ -769,7 +771,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let mut mode = req.mode;
     let mut slips = [0usize; 2];
     let mut n_slips = 0;
-    for j in 1..=sys.n {
+    for j in 1..sys.n + 1 {
         if breaking & (1 << j) != 0 {
             slips[n_slips] = j;
             n_slips += 1;
@@ -856,7 +858,7 @@ impl<'a> Walk<'a> {
         }
         let (mut remaining, mut remaining_kept) = ([0; MAX_BODIES + 1], [0; MAX_BODIES + 1]);
         let mut remaining_unbroken = [[0; 2]; MAX_BODIES + 1];
-        for j in (1..=sys.n).rev() {
+        for j in (1..sys.n + 1).rev() {
             let in_zero = index[j] != usize::MAX;
             remaining[j] = remaining[j + 1] + i32::from(in_zero);
             let kept = in_zero && req.was_stuck & (1 << j) != 0;
@@ -879,12 +881,12 @@ impl<'a> Walk<'a> {
         use Contact::{SlipBackward as Back, SlipForward as Fwd, Stuck};
         let mut options = [[Stuck, Fwd, Back]; MAX_BODIES];
         let mut all_stuck = req.mode;
-        for j in 1..=sys.n {
+        for j in 1..sys.n + 1 {
             if index[j] != usize::MAX {
                 all_stuck.contact[j] = Stuck;
             }
         }
-        for j in 1..=sys.n {
+        for j in 1..sys.n + 1 {
             if index[j] == usize::MAX {
                 continue;
             }
@@ -902,7 +904,7 @@ impl<'a> Walk<'a> {
                 (false, _) => [Stuck, Fwd, Back],
             };
         }
-        let zero_ifaces = (1..=sys.n)
+        let zero_ifaces = (1..sys.n + 1)
             .filter(|&j| index[j] != usize::MAX)
             .fold(0, |m, j| m | (1 << j));
         Walk {
@@ -918,7 +920,7 @@ impl<'a> Walk<'a> {
     }
 
     fn all_equal_friction(&self) -> bool {
-        (1..=self.sys.n)
+        (1..self.sys.n + 1)
             .filter(|&j| self.index[j] != usize::MAX)
             .all(|j| self.sys.mus[j] == self.sys.muk[j])
     }
@@ -1042,7 +1044,7 @@ impl<'a> Walk<'a> {
 
     fn key(&self, mode: &Mode) -> Key {
         let (mut stuck_bits, mut signs, mut stuck_ifaces, mut s) = (0u32, 0u32, 0u32, 0);
-        for j in 1..=self.sys.n {
+        for j in 1..self.sys.n + 1 {
             let k = self.index[j];
             if k == usize::MAX {
                 continue;

@@ -8,7 +8,9 @@ impl Simulator {
     /// Interfaces whose relative velocity is exactly zero (free ones excluded).
     pub(super) fn zero_mask(&self) -> u32 {
         let mut z = 0;
-        for j in 1..=self.sys.n {
+        // Half-open ranges on the event path: an inclusive range's
+        // iterator tests an extra flag at every step.
+        for j in 1..self.sys.n + 1 {
             if !self.sys.is_free(j) && self.v[j] == self.v[j - 1] {
                 z |= 1 << j;
             }
@@ -22,7 +24,7 @@ impl Simulator {
     }
 
     pub(super) fn stuck_mask(&self) -> u32 {
-        (1..=self.sys.n)
+        (1..self.sys.n + 1)
             .filter(|&j| self.mode.is_stuck(j))
             .fold(0, |m, j| m | (1 << j))
     }
@@ -75,7 +77,7 @@ impl Simulator {
     pub(super) fn join_velocities(&mut self, joined: u32) {
         let n = self.sys.n;
         let mut start = 0;
-        for j in 1..=n + 1 {
+        for j in 1..n + 2 {
             let linked = j <= n && (self.mode.is_stuck(j) || joined & (1 << j) != 0);
             if linked {
                 continue;
@@ -289,7 +291,7 @@ impl DynamicsCache {
     /// The mode as a number: two bits per interface, and the block count.
     fn key(mode: &Mode) -> u32 {
         let mut k = mode.n as u32;
-        for j in 1..=mode.n {
+        for j in 1..mode.n + 1 {
             k |= (mode.contact[j] as u32) << (2 * j + 2);
         }
         k
