@@ -43,7 +43,7 @@ const RECIPROCALS: [f64; 2 * TERMS + 2] = {
 pub(super) fn degree(h: f64, w2: f64, cm: f64) -> usize {
     let rho = h * (w2.sqrt() + cm).max(1.0);
     let mut term = 1.0;
-    for k in 1..=MAX_DEGREE {
+    for k in 1..MAX_DEGREE + 1 {
         term *= rho / k as f64;
         if term < 1e-20 && k >= 4 {
             return k;
@@ -117,14 +117,16 @@ impl ExactMap {
         let n_terms = degree + 6;
         let mut rows = [[[0.0; 4]; 2]; TERMS + 1];
         rows[0] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
-        for k in 1..=n_terms {
+        // (Half-open ranges: an inclusive range's iterator tests a flag at
+        // every step.)
+        for k in 1..n_terms + 1 {
             let f = h / k as f64;
             rows[k] =
                 rows[k - 1].map(|x| [-w2 * x[1] * f, (x[0] - cm * x[1]) * f, x[1] * f, x[2] * f]);
         }
         let (mut u, mut v, mut int_u) = ([0.0; 4], [0.0; 4], [0.0; 4]);
         // Sum the small terms first.
-        for k in (0..=degree).rev() {
+        for k in (0..degree + 1).rev() {
             for i in 0..4 {
                 u[i] += rows[k][0][i];
                 v[i] += rows[k][1][i];
@@ -135,9 +137,9 @@ impl ExactMap {
         // ∫_0^h v² = h Σ_ij (r_i z)(r_j z) / (i + j + 1): the inner sums
         // over j first, w[i] = Σ_j r_j / (i + j + 1).
         let mut q = [[0.0; 4]; 4];
-        for i in (0..=degree).rev() {
+        for i in (0..degree + 1).rev() {
             let mut w = [0.0; 4];
-            for j in (0..=degree).rev() {
+            for j in (0..degree + 1).rev() {
                 for (ws, r) in w.iter_mut().zip(rows[j][1]) {
                     *ws += r * RECIPROCALS[i + j];
                 }
@@ -167,8 +169,8 @@ impl ExactMap {
         // of it); the factor covers rounding.
         let mut bound = [[0.0; 4]; 5];
         for (b, m) in bound.iter_mut().zip(1..=5usize) {
-            for k in (0..=n_terms - m).rev() {
-                let falling: f64 = ((k + 1)..=(k + m)).map(|x| x as f64).product();
+            for k in (0..n_terms - m + 1).rev() {
+                let falling: f64 = ((k + 1)..(k + m + 1)).map(|x| x as f64).product();
                 for i in 0..4 {
                     b[i] += rows[m + k][1][i].abs() * falling;
                 }

@@ -42,7 +42,8 @@ impl Poly {
     pub(super) fn bounds(&self) -> [f64; 2] {
         let (mut m2, mut m3) = (0.0, 0.0);
         let mut kf = 2.0;
-        for c in self.c.iter().take(self.deg + 1).skip(2) {
+        let top = self.deg + 1;
+        for c in &self.c[top.min(2)..top] {
             let term = kf * (kf - 1.0) * c.abs();
             m2 += term;
             m3 += term * (kf - 2.0);
@@ -75,8 +76,8 @@ impl Poly {
     /// the zeros of `p` in (0, 1]. `None` when the first coefficient left is
     /// negative: the guard does not grow from its zero.
     pub(super) fn past_zero_start(&self) -> Option<Poly> {
-        let scale: f64 = (1..=self.deg).map(|k| self.c[k].abs()).sum();
-        let m = (0..=self.deg.min(3)).find(|&k| self.c[k].abs() > 1e-12 * scale)?;
+        let scale: f64 = self.c[1..self.deg + 1].iter().map(|c| c.abs()).sum();
+        let m = (0..self.deg.min(3) + 1).find(|&k| self.c[k].abs() > 1e-12 * scale)?;
         if self.c[m] < 0.0 {
             return None;
         }
@@ -109,7 +110,7 @@ impl Poly {
 
     pub(super) fn derivative(&self) -> Poly {
         let mut c = [0.0; N_COEF];
-        for k in 1..=self.deg {
+        for k in 1..self.deg + 1 {
             c[k - 1] = k as f64 * self.c[k];
         }
         Poly::new(c, self.deg.max(1) - 1)
@@ -297,7 +298,8 @@ pub(super) const INV: [f64; N_COEF + 1] = {
 /// `∫_0^s p(σ) dσ`.
 pub(super) fn integral(p: &Poly, s: f64) -> f64 {
     let mut total = 0.0;
-    for k in (0..=p.deg).rev() {
+    // (Half-open: an inclusive range's iterator tests a flag per step.)
+    for k in (0..p.deg + 1).rev() {
         total = total * s + p.c[k] * INV[k];
     }
     total * s
