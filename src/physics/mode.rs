@@ -198,6 +198,9 @@ pub struct Dynamics {
     /// slipping ones, and stuck ones in the structure's cluster. A stick
     /// higher up carries a constant force; a free interface has no guard.
     pub changing_guards: u32,
+    /// Of `changing_guards`, the stuck interfaces (their guards are
+    /// [`Guard::Stuck`]).
+    pub stuck_guards: u32,
     /// The guards of `changing_guards`, in order, first `n_guards` entries.
     pub guards: [Guard; MAX_BODIES],
     /// Number of entries of `guards`.
@@ -235,6 +238,7 @@ impl Dynamics {
                 continue;
             }
             d.guards[d.n_guards] = if mode.is_stuck(j) {
+                d.stuck_guards |= 1 << j;
                 let (mass_above, f_top) = d.force_affine(j, mode);
                 Guard::Stuck {
                     mass_above,
@@ -281,6 +285,7 @@ impl Dynamics {
             support_force: 0.0,
             prescribed: sys.prescribed(),
             changing_guards: 0,
+            stuck_guards: 0,
             guards: [Guard::Slip {
                 hi: 0,
                 lo: 0,
@@ -832,8 +837,11 @@ struct Walk<'a> {
     /// The same two counts without the interfaces of `must_break` (a
     /// branch that keeps none of those stuck can only gain these).
     remaining_unbroken: [[i32; 2]; MAX_BODIES + 1],
-    /// The contacts tried at each interface of `zero`, in the order tried.
+    /// The contacts tried at each interface, in the order tried: the first
+    /// `n_options` (three for an interface of `zero`, its kept contact
+    /// alone for the others).
     options: [[Contact; 3]; MAX_BODIES],
+    n_options: [usize; MAX_BODIES],
     /// The interfaces in `zero` with a contact to choose (bit j).
     zero_ifaces: u32,
 }
@@ -880,6 +888,7 @@ impl<'a> Walk<'a> {
         // the static limit there.
         use Contact::{SlipBackward as Back, SlipForward as Fwd, Stuck};
         let mut options = [[Stuck, Fwd, Back]; MAX_BODIES];
+        let mut n_options = [3; MAX_BODIES];
         let mut all_stuck = req.mode;
         for j in 1..sys.n + 1 {
             if index[j] != usize::MAX {
@@ -888,6 +897,7 @@ impl<'a> Walk<'a> {
         }
         for j in 1..sys.n + 1 {
             if index[j] == usize::MAX {
+                (options[j][0], n_options[j]) = (req.mode.contact[j], 1);
                 continue;
             }
             let breaks = req.must_break & (1 << j) != 0;
@@ -915,6 +925,7 @@ impl<'a> Walk<'a> {
             remaining_kept,
             remaining_unbroken,
             options,
+            n_options,
             zero_ifaces,
         }
     }
@@ -991,13 +1002,7 @@ impl<'a> Walk<'a> {
             return;
         }
         let in_zero = self.index[j] != usize::MAX;
-        let keep = [self.req.mode.contact[j]];
-        let options = if in_zero {
-            &self.options[j][..]
-        } else {
-            &keep[..]
-        };
-        for &c in options {
+        for &c in &self.options[j][..self.n_options[j]] {
             mode.contact[j] = c;
             if c == Contact::Stuck {
                 let breaks = in_zero && self.req.must_break & (1 << j) != 0;

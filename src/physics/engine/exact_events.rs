@@ -427,10 +427,15 @@ impl Simulator {
             let (a0, bound) = (flow.accel_start, flow.accel_spread_bound);
             a0 - bound > lo && a0 + bound < hi
         });
+        let skipped = if sticks_hold {
+            muted | d.stuck_guards
+        } else {
+            muted
+        };
         for g in &d.guards[..d.n_guards] {
             let j = ifaces.trailing_zeros() as usize;
             ifaces &= ifaces - 1;
-            if muted & (1 << j) != 0 || (sticks_hold && matches!(g, Guard::Stuck { .. })) {
+            if skipped & (1 << j) != 0 {
                 continue;
             }
             if flow.holds(self, g) {
