@@ -575,9 +575,13 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
 
 /// Interfaces (bit j) that carry no friction.
 fn free_mask(sys: &System) -> u32 {
-    (1..sys.n + 1)
-        .filter(|&j| sys.is_free(j))
-        .fold(0, |m, j| m | (1 << j))
+    let mut m = 0;
+    for j in 1..sys.n + 1 {
+        if sys.is_free(j) {
+            m |= 1 << j;
+        }
+    }
+    m
 }
 
 /// The contact law on one cluster of `mode`, bodies `bottom..end` (the
@@ -763,24 +767,25 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
 /// not covered (the walk decides).
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
-    let mut equal = true;
-    for j in 1..sys.n + 1 {
-        if zero & (1 << j) != 0 {
-            equal &= sys.mus[j] == sys.muk[j];
-        }
-    }
     let breaking = zero & req.must_break;
-    if !equal || breaking.count_ones() > 2 {
+    if breaking.count_ones() > 2 {
         return None;
     }
     let mut mode = req.mode;
     let mut slips = [0usize; 2];
     let mut n_slips = 0;
-    for j in 1..sys.n + 1 {
+    // One pass over the interfaces of `zero`, from the bottom.
+    let mut rest = zero;
+    while rest != 0 {
+        let j = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        if sys.mus[j] != sys.muk[j] {
+            return None;
+        }
         if breaking & (1 << j) != 0 {
             slips[n_slips] = j;
             n_slips += 1;
-        } else if zero & (1 << j) != 0 {
+        } else {
             mode.contact[j] = Contact::Stuck;
         }
     }
