@@ -598,7 +598,7 @@ fn free_mask(sys: &System) -> u32 {
 /// On a prescribed support the cluster on it (blocks of mass `M'`, load `s'`
 /// from the interface above) moves by [`support_law`] (`load0 = ag`), as
 /// the integrators move it afterwards.
-#[inline]
+#[inline(always)]
 fn cluster_law(
     sys: &System,
     mode: &Mode,
