@@ -37,6 +37,28 @@ const RECIPROCALS: [f64; 2 * TERMS + 2] = {
     r
 };
 
+/// `FALLING[m][k] = (k + 1) (k + 2) ... (k + m)`, for the derivative
+/// bounds (exact integers: the products the build took one by one).
+const FALLING: [[f64; TERMS + 1]; 6] = {
+    let mut f = [[1.0; TERMS + 1]; 6];
+    let mut m = 1;
+    while m < 6 {
+        let mut k = 0;
+        while k <= TERMS {
+            let mut x = k + 1;
+            let mut p = 1.0;
+            while x <= k + m {
+                p *= x as f64;
+                x += 1;
+            }
+            f[m][k] = p;
+            k += 1;
+        }
+        m += 1;
+    }
+    f
+};
+
 /// Degree at which the Taylor terms of `exp(A h)` fall below 1e-20: they
 /// shrink as `ρ^k / k!` with `ρ = h max(ω + c/m, 1)` (the oscillator's rate
 /// and the forcing's polynomial part).
@@ -170,7 +192,7 @@ impl ExactMap {
         let mut bound = [[0.0; 4]; 5];
         for (b, m) in bound.iter_mut().zip(1..=5usize) {
             for k in (0..n_terms - m + 1).rev() {
-                let falling: f64 = ((k + 1)..(k + m + 1)).map(|x| x as f64).product();
+                let falling = FALLING[m][k];
                 for i in 0..4 {
                     b[i] += rows[m + k][1][i].abs() * falling;
                 }
