@@ -894,10 +894,13 @@ impl<'a> Walk<'a> {
         use Contact::{SlipBackward as Back, SlipForward as Fwd, Stuck};
         let mut options = [[Stuck, Fwd, Back]; MAX_BODIES];
         let mut n_options = [3; MAX_BODIES];
+        let zero_ifaces = (1..sys.n + 1)
+            .filter(|&j| index[j] != usize::MAX)
+            .fold(0, |m, j| m | (1 << j));
         let mut all_stuck = req.mode;
-        for j in 1..sys.n + 1 {
-            if index[j] != usize::MAX {
-                all_stuck.contact[j] = Stuck;
+        for (j, c) in all_stuck.contact.iter_mut().enumerate() {
+            if zero_ifaces & (1 << j) != 0 {
+                *c = Stuck;
             }
         }
         for j in 1..sys.n + 1 {
@@ -919,9 +922,6 @@ impl<'a> Walk<'a> {
                 (false, _) => [Stuck, Fwd, Back],
             };
         }
-        let zero_ifaces = (1..sys.n + 1)
-            .filter(|&j| index[j] != usize::MAX)
-            .fold(0, |m, j| m | (1 << j));
         Walk {
             sys,
             req,

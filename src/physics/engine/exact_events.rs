@@ -239,8 +239,8 @@ impl Flow {
                     for (ck, vk) in p.c.iter_mut().zip(&self.v.c) {
                         *ck = sign * (0.0 - vk);
                     }
-                    for k in 0..3 {
-                        p.c[k] = sign * (vh[k] - self.v.c[k]);
+                    for (k, vhk) in vh.iter().enumerate() {
+                        p.c[k] = sign * (vhk - self.v.c[k]);
                     }
                     p.deg = self.v.deg.max(2);
                 } else {
