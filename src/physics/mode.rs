@@ -538,7 +538,8 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
         if end <= sys.n && mode.is_stuck(end) {
             continue;
         }
-        let (accel, w) = cluster_law(sys, mode, zero, load0, [bottom, end], accel_below);
+        let ends = [bottom, end];
+        let (accel, w) = cluster_law(sys, mode, zero, load0, ends, accel_below, f64::INFINITY);
         worst = worst.max(w);
         (bottom, accel_below) = (end, accel);
     }
@@ -562,7 +563,9 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
         // Bits bottom..=end (bit 0 and bit n + 1 are never in `zero`).
         let span = (2u32 << end) - (1u32 << bottom);
         if zero & span != 0 {
-            let (accel, w) = cluster_law(sys, mode, zero, load0, [bottom, end], accel_below);
+            let ends = [bottom, end];
+            let (accel, w) =
+                cluster_law(sys, mode, zero, load0, ends, accel_below, CONSISTENCY_TOL);
             if w > CONSISTENCY_TOL {
                 return false;
             }
@@ -598,6 +601,11 @@ fn free_mask(sys: &System) -> u32 {
 /// On a prescribed support the cluster on it (blocks of mass `M'`, load `s'`
 /// from the interface above) moves by [`support_law`] (`load0 = ag`), as
 /// the integrators move it afterwards.
+///
+/// The interfaces are taken from the bottom up and the search stops once
+/// the violation exceeds `enough`: a caller that only asks whether the law
+/// holds passes `CONSISTENCY_TOL` (most clusters a walk tries fail at
+/// once), one that ranks violations `f64::INFINITY` (the largest).
 #[inline(always)]
 fn cluster_law(
     sys: &System,
@@ -606,6 +614,7 @@ fn cluster_law(
     load0: f64,
     [bottom, end]: [usize; 2],
     accel_below: f64,
+    enough: f64,
 ) -> (f64, f64) {
     let slip_force = |j: usize| -sys.muk[j] * sys.normal[j] * mode.contact[j].slip_sign();
     let mass = sys.mass_up[bottom][end];
@@ -632,7 +641,7 @@ fn cluster_law(
         worst = -mode.contact[bottom].slip_sign() * (accel - accel_below) / sys.g;
     }
     let mut inside = zero & ((1u32 << end) - 1) & !((2u32 << bottom) - 1);
-    while inside != 0 {
+    while inside != 0 && !(worst > enough) {
         let i = inside.trailing_zeros() as usize;
         inside &= inside - 1;
         let limit = sys.mus[i] * sys.normal[i];
@@ -650,7 +659,7 @@ fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
     let end = (j + 1..sys.n + 1)
         .find(|&i| !mode.is_stuck(i))
         .unwrap_or(sys.n + 1);
-    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0);
+    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
     let f_top = if end <= sys.n {
         -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
     } else {
@@ -1048,6 +1057,7 @@ impl<'a> Walk<'a> {
             self.req.load0,
             ends,
             open.accel_below,
+            CONSISTENCY_TOL,
         );
         (worst <= CONSISTENCY_TOL).then_some(accel)
     }
