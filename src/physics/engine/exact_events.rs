@@ -216,10 +216,11 @@ impl Flow {
     }
 
     /// The guard `g`, not proved by [`Flow::holds`], as polynomials (a
-    /// stick band has two sides) written to `out`, without a side proved
-    /// positive over the stretch by its exact spread; returns how many
-    /// (written in place: no array of options moved per guard).
-    fn guard_polys(&mut self, sim: &Simulator, g: &Guard, out: &mut [Poly; 2]) -> usize {
+    /// stick band has two sides) written to `out` with their spreads,
+    /// without a side proved positive over the stretch by its exact spread;
+    /// returns how many (written in place: no array of options moved per
+    /// guard).
+    fn guard_polys(&mut self, sim: &Simulator, g: &Guard, out: &mut [(Poly, f64); 2]) -> usize {
         match *g {
             Guard::Slip { hi, lo, sign } => {
                 // `sign (velocity(hi) - velocity(lo))`: the clusters above
@@ -234,7 +235,7 @@ impl Flow {
                     ]
                 };
                 let vh = upper(hi);
-                let p = &mut out[0];
+                let (p, spread) = &mut out[0];
                 if lo == 0 {
                     for (ck, vk) in p.c.iter_mut().zip(&self.v.c) {
                         *ck = sign * (0.0 - vk);
@@ -250,7 +251,8 @@ impl Flow {
                     }
                     p.deg = 2;
                 }
-                usize::from(p.c[0] <= p.spread(1.0))
+                *spread = p.spread(1.0);
+                usize::from(p.c[0] <= *spread)
             }
             Guard::Stuck {
                 mass_above,
@@ -261,12 +263,14 @@ impl Flow {
                 let a0 = self.accel_start;
                 let (accel, spread) = self.accel();
                 let mut n = 0;
+                // A side's spread is the acceleration's (`±1` times its
+                // coefficients past the first).
                 if a0 - spread <= lo {
-                    out[n] = accel.affine(1.0, -lo);
+                    out[n] = (accel.affine(1.0, -lo), spread);
                     n += 1;
                 }
                 if a0 + spread >= hi {
-                    out[n] = accel.affine(-1.0, hi);
+                    out[n] = (accel.affine(-1.0, hi), spread);
                     n += 1;
                 }
                 n
@@ -329,7 +333,7 @@ impl Simulator {
         let deg = self.maps.stretch_degree(&self.sys, t1 - self.t);
         let mut flow = Flow::default();
         // The guards' polynomials of every stretch, written in place.
-        let mut polys = [Poly::default(); 2];
+        let mut polys = [(Poly::default(), 0.0); 2];
         while self.t < t1 {
             let h = t1 - self.t;
             flow.start(self, exc, t_ref, h, deg);
@@ -412,7 +416,7 @@ impl Simulator {
     fn next_event(
         &self,
         flow: &mut Flow,
-        polys: &mut [Poly; 2],
+        polys: &mut [(Poly, f64); 2],
         muted: u32,
         tol: f64,
     ) -> Result<Next, Undecided> {
@@ -442,10 +446,10 @@ impl Simulator {
                 continue;
             }
             let n_polys = flow.guard_polys(self, g, polys);
-            for poly in &polys[..n_polys] {
+            for (poly, scale) in &polys[..n_polys] {
                 // A guard at zero (a contact that has just switched) must
                 // grow from it, or it fires at once.
-                let scale = poly.spread(1.0);
+                let scale = *scale;
                 let grown;
                 let poly = if poly.c[0] > 1e-12 * scale {
                     poly
