@@ -460,7 +460,7 @@ impl Simulator {
                     at_once |= 1 << j;
                     continue;
                 };
-                let (g0, d0) = poly.eval_d(0.0);
+                let (g0, d0) = poly.start();
                 // Only zeros before the earliest one found so far matter.
                 let end = earliest.map_or(1.0, |(s, _)| s);
                 let start = [0.0, g0.max(0.0), d0];

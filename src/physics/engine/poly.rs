@@ -108,6 +108,14 @@ impl Poly {
         (y, d)
     }
 
+    /// Value and derivative at `s = 0`, its first two coefficients (those
+    /// of [`Poly::eval_d`] at 0 for finite coefficients, without the
+    /// evaluation).
+    #[inline]
+    pub(super) fn start(&self) -> (f64, f64) {
+        (self.c[0], if self.deg >= 1 { self.c[1] } else { 0.0 })
+    }
+
     pub(super) fn derivative(&self) -> Poly {
         let mut c = [0.0; N_COEF];
         for k in 1..self.deg + 1 {
