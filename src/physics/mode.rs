@@ -1048,6 +1048,7 @@ impl<'a> Walk<'a> {
     /// Closes the cluster from `open.bottom` to body `end - 1`: its
     /// absolute acceleration if it satisfies the contact law
     /// ([`cluster_law`]), `None` otherwise.
+    #[inline(always)]
     fn close(&self, open: Open, end: usize, mode: &Mode) -> Option<f64> {
         let ends = [open.bottom, end];
         let (accel, worst) = cluster_law(
