@@ -276,13 +276,30 @@ impl Simulator {
 /// The dynamics of the modes met so far: a switch back to a mode copies
 /// them instead of rebuilding them (derived data only: each entry is
 /// `Dynamics::new` of its mode, rebuilt identically on demand).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(super) struct DynamicsCache {
     keys: Vec<u32>,
     dynamics: Vec<Dynamics>,
     /// Entry replaced next once full.
     next: usize,
+    /// By a hash of the key, the entry last found or kept for it, plus one
+    /// (0: none): most loads look at one key, not at every key.
+    hint: [u8; HINT_SLOTS],
 }
+
+impl Default for DynamicsCache {
+    fn default() -> DynamicsCache {
+        DynamicsCache {
+            keys: Vec::new(),
+            dynamics: Vec::new(),
+            next: 0,
+            hint: [0; HINT_SLOTS],
+        }
+    }
+}
+
+/// Slots of [`DynamicsCache`]'s hint (a power of two).
+const HINT_SLOTS: usize = 128;
 
 /// How many modes' dynamics are kept (then the oldest is replaced).
 const DYNAMICS_CACHE_SIZE: usize = 64;
@@ -303,10 +320,22 @@ impl DynamicsCache {
         *self = DynamicsCache::default();
     }
 
+    /// The hint's slot of `key` (Fibonacci hashing).
+    fn slot(key: u32) -> usize {
+        (key.wrapping_mul(0x9E37_79B9) >> (32 - HINT_SLOTS.trailing_zeros())) as usize
+    }
+
     /// Sets `out` to the dynamics of `mode`, built if missing.
     pub(super) fn load(&mut self, sys: &System, mode: &Mode, out: &mut Dynamics) {
         let key = DynamicsCache::key(mode);
+        let slot = DynamicsCache::slot(key);
+        let hinted = usize::from(self.hint[slot]);
+        if hinted != 0 && self.keys[hinted - 1] == key {
+            *out = self.dynamics[hinted - 1];
+            return;
+        }
         if let Some(i) = self.keys.iter().position(|&k| k == key) {
+            self.hint[slot] = (i + 1) as u8;
             *out = self.dynamics[i];
             return;
         }
@@ -329,11 +358,13 @@ impl DynamicsCache {
             }
             self.keys.push(key);
             self.dynamics.push(d);
+            self.hint[DynamicsCache::slot(key)] = self.keys.len() as u8;
         } else {
             let i = self.next;
             self.keys[i] = key;
             self.dynamics[i] = d;
             self.next = (i + 1) % DYNAMICS_CACHE_SIZE;
+            self.hint[DynamicsCache::slot(key)] = (i + 1) as u8;
         }
     }
 }
