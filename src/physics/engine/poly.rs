@@ -135,6 +135,7 @@ pub(super) struct Undecided;
 /// over `(a, e]` is proved. `tol` is the width below which a stretch is
 /// not split further: a sign change there is the zero, and a dip below zero
 /// and back inside it is not seen (a graze).
+#[inline]
 pub(super) fn first_zero(
     g: &Poly,
     [m2, m3]: [f64; 2],
