@@ -729,6 +729,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
 fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     let walk = Walk::new(sys, req);
     let mut search = Search {
+        mode: req.mode,
         best: None,
         count: 0,
         bound: true,
@@ -746,6 +747,7 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     let ambiguous = !walk.all_equal_friction()
         && (search.count > 1 || {
             let mut all = Search {
+                mode: req.mode,
                 best: None,
                 count: 0,
                 bound: false,
@@ -823,6 +825,8 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 /// were found; `bound`: drop branches that cannot beat the best on the
 /// rule's first two criteria; `limit`: stop after so many.
 struct Search {
+    /// The assignment being built (every contact of the walk's branch).
+    mode: Mode,
     best: Option<(Key, Mode)>,
     count: u32,
     bound: bool,
@@ -952,12 +956,12 @@ impl<'a> Walk<'a> {
 
     /// Walks the assignments into `search`.
     fn search(&self, search: &mut Search) {
-        let mut mode = self.req.mode;
+        search.mode = self.req.mode;
         let open = Open {
             bottom: 0,
             accel_below: 0.0,
         };
-        self.choose(1, open, &mut mode, (0, 0, false), search);
+        self.choose(1, open, (0, 0, false), search);
     }
 
     /// Whether every completion of a branch at interface `j` (`stuck` and
@@ -992,7 +996,6 @@ impl<'a> Walk<'a> {
         &self,
         j: usize,
         open: Open,
-        mode: &mut Mode,
         (stuck, kept, broken): (i32, i32, bool),
         search: &mut Search,
     ) {
@@ -1006,18 +1009,18 @@ impl<'a> Walk<'a> {
         let n = self.sys.n;
         if j > n {
             search.tries += 1;
-            if self.close(open, n + 1, mode).is_some() {
+            if self.close(open, n + 1, &search.mode).is_some() {
                 search.count += 1;
-                let key = self.key(mode);
+                let key = self.key(&search.mode);
                 if search.best.is_none_or(|(b, _)| key < b) {
-                    search.best = Some((key, *mode));
+                    search.best = Some((key, search.mode));
                 }
             }
             return;
         }
         let in_zero = self.index[j] != usize::MAX;
         for &c in &self.options[j][..self.n_options[j]] {
-            mode.contact[j] = c;
+            search.mode.contact[j] = c;
             if c == Contact::Stuck {
                 let breaks = in_zero && self.req.must_break & (1 << j) != 0;
                 let was = in_zero && self.req.was_stuck & (1 << j) != 0;
@@ -1026,23 +1029,23 @@ impl<'a> Walk<'a> {
                     kept + i32::from(was),
                     broken || breaks,
                 );
-                self.choose(j + 1, open, mode, counted, search);
+                self.choose(j + 1, open, counted, search);
             } else if self.beaten(j + 1, (stuck, kept, broken), search) {
                 // The bound of the next interface, before the cluster is
                 // closed: the branch is dropped as it would be there.
                 continue;
             } else if let Some(accel) = {
                 search.tries += 1;
-                self.close(open, j, mode)
+                self.close(open, j, &search.mode)
             } {
                 let next = Open {
                     bottom: j,
                     accel_below: accel,
                 };
-                self.choose(j + 1, next, mode, (stuck, kept, broken), search);
+                self.choose(j + 1, next, (stuck, kept, broken), search);
             }
         }
-        mode.contact[j] = self.req.mode.contact[j];
+        search.mode.contact[j] = self.req.mode.contact[j];
     }
 
     /// Closes the cluster from `open.bottom` to body `end - 1`: its
