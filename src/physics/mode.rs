@@ -641,7 +641,10 @@ fn cluster_law(
         worst = -mode.contact[bottom].slip_sign() * (accel - accel_below) / sys.g;
     }
     let mut inside = zero & ((1u32 << end) - 1) & !((2u32 << bottom) - 1);
-    while inside != 0 && !(worst > enough) {
+    while inside != 0 {
+        if worst > enough {
+            break; // decided: the rest cannot lower it
+        }
         let i = inside.trailing_zeros() as usize;
         inside &= inside - 1;
         let limit = sys.mus[i] * sys.normal[i];
