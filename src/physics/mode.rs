@@ -198,6 +198,9 @@ pub struct Dynamics {
     /// slipping ones, and stuck ones in the structure's cluster. A stick
     /// higher up carries a constant force; a free interface has no guard.
     pub changing_guards: u32,
+    /// Of `changing_guards`, the stuck interfaces (their guards are
+    /// [`Guard::Stuck`]).
+    pub stuck_guards: u32,
     /// The guards of `changing_guards`, in order, first `n_guards` entries.
     pub guards: [Guard; MAX_BODIES],
     /// Number of entries of `guards`.
@@ -219,13 +222,13 @@ impl Dynamics {
     /// interfaces.
     pub fn new(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics::clusters(sys, mode);
-        for j in 1..=sys.n {
+        for j in 1..sys.n + 1 {
             let constant = mode.is_stuck(j) && d.cluster_of[j] != 0;
             if !sys.is_free(j) && !constant {
                 d.changing_guards |= 1 << j;
             }
         }
-        for j in 1..=sys.n {
+        for j in 1..sys.n + 1 {
             let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
             if hi != lo {
                 d.moving[d.n_moving] = Moving { j, hi, lo };
@@ -235,6 +238,7 @@ impl Dynamics {
                 continue;
             }
             d.guards[d.n_guards] = if mode.is_stuck(j) {
+                d.stuck_guards |= 1 << j;
                 let (mass_above, f_top) = d.force_affine(j, mode);
                 Guard::Stuck {
                     mass_above,
@@ -281,6 +285,7 @@ impl Dynamics {
             support_force: 0.0,
             prescribed: sys.prescribed(),
             changing_guards: 0,
+            stuck_guards: 0,
             guards: [Guard::Slip {
                 hi: 0,
                 lo: 0,
@@ -292,7 +297,7 @@ impl Dynamics {
             stick_band: None,
             slip_sign: [0.0; MAX_BODIES],
         };
-        for i in 0..=sys.n {
+        for i in 0..sys.n + 1 {
             if i == 0 || !mode.is_stuck(i) {
                 d.n_clusters += 1;
                 d.bottom[d.n_clusters - 1] = i;
@@ -302,7 +307,7 @@ impl Dynamics {
             d.top[c] = i;
             d.mass[c] += sys.mass[i];
         }
-        for j in 1..=sys.n {
+        for j in 1..sys.n + 1 {
             let f = -sys.muk[j] * sys.normal[j] * mode.contact[j].slip_sign();
             d.slip_force[j] = f;
             if !mode.is_stuck(j) {
@@ -332,7 +337,7 @@ impl Dynamics {
         }
         for c in 0..d.n_clusters {
             let mut above = 0.0;
-            for j in (d.bottom[c]..=d.top[c]).rev() {
+            for j in (d.bottom[c]..d.top[c] + 1).rev() {
                 above += sys.mass[j];
                 d.mass_above[j] = above;
             }
@@ -438,6 +443,7 @@ impl Dynamics {
     }
 
     /// Friction force of interface j (force of body j-1 on body j).
+    #[inline]
     pub fn force(&self, j: usize, mode: &Mode, load0: f64) -> f64 {
         let (mass_above, f_top) = self.force_affine(j, mode);
         if mode.is_stuck(j) {
@@ -451,6 +457,7 @@ impl Dynamics {
     /// its upper body's cluster: for a stuck interface the bodies j..=top move
     /// with the cluster, so F_j = M_above A + F_{top+1}; a slipping or free
     /// one carries its constant friction force (a = 0).
+    #[inline]
     pub fn force_affine(&self, j: usize, mode: &Mode) -> (f64, f64) {
         if mode.is_stuck(j) {
             let above = self.top[self.cluster_of[j]] + 1;
@@ -527,11 +534,12 @@ pub fn stick_capacity(sys: &System, j: usize) -> f64 {
 pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
     let zero = zero & !free_mask(sys);
     let (mut worst, mut bottom, mut accel_below) = (f64::NEG_INFINITY, 0, 0.0);
-    for end in 1..=sys.n + 1 {
+    for end in 1..sys.n + 2 {
         if end <= sys.n && mode.is_stuck(end) {
             continue;
         }
-        let (accel, w) = cluster_law(sys, mode, zero, load0, [bottom, end], accel_below);
+        let ends = [bottom, end];
+        let (accel, w) = cluster_law(sys, mode, zero, load0, ends, accel_below, f64::INFINITY);
         worst = worst.max(w);
         (bottom, accel_below) = (end, accel);
     }
@@ -546,14 +554,18 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
 /// acceleration) and stopping at the first that breaks the law.
 fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     let (mut bottom, mut accel_below) = (0, 0.0);
-    for end in 1..=sys.n + 1 {
+    // (Half-open ranges in the resolution: an inclusive range's iterator
+    // tests an extra flag at every step.)
+    for end in 1..sys.n + 2 {
         if end <= sys.n && mode.is_stuck(end) {
             continue;
         }
         // Bits bottom..=end (bit 0 and bit n + 1 are never in `zero`).
         let span = (2u32 << end) - (1u32 << bottom);
         if zero & span != 0 {
-            let (accel, w) = cluster_law(sys, mode, zero, load0, [bottom, end], accel_below);
+            let ends = [bottom, end];
+            let (accel, w) =
+                cluster_law(sys, mode, zero, load0, ends, accel_below, CONSISTENCY_TOL);
             if w > CONSISTENCY_TOL {
                 return false;
             }
@@ -566,9 +578,13 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
 
 /// Interfaces (bit j) that carry no friction.
 fn free_mask(sys: &System) -> u32 {
-    (1..=sys.n)
-        .filter(|&j| sys.is_free(j))
-        .fold(0, |m, j| m | (1 << j))
+    let mut m = 0;
+    for j in 1..sys.n + 1 {
+        if sys.is_free(j) {
+            m |= 1 << j;
+        }
+    }
+    m
 }
 
 /// The contact law on one cluster of `mode`, bodies `bottom..end` (the
@@ -585,7 +601,12 @@ fn free_mask(sys: &System) -> u32 {
 /// On a prescribed support the cluster on it (blocks of mass `M'`, load `s'`
 /// from the interface above) moves by [`support_law`] (`load0 = ag`), as
 /// the integrators move it afterwards.
-#[inline]
+///
+/// The interfaces are taken from the bottom up and the search stops once
+/// the violation exceeds `enough`: a caller that only asks whether the law
+/// holds passes `CONSISTENCY_TOL` (most clusters a walk tries fail at
+/// once), one that ranks violations `f64::INFINITY` (the largest).
+#[inline(always)]
 fn cluster_law(
     sys: &System,
     mode: &Mode,
@@ -593,6 +614,7 @@ fn cluster_law(
     load0: f64,
     [bottom, end]: [usize; 2],
     accel_below: f64,
+    enough: f64,
 ) -> (f64, f64) {
     let slip_force = |j: usize| -sys.muk[j] * sys.normal[j] * mode.contact[j].slip_sign();
     let mass = sys.mass_up[bottom][end];
@@ -620,6 +642,9 @@ fn cluster_law(
     }
     let mut inside = zero & ((1u32 << end) - 1) & !((2u32 << bottom) - 1);
     while inside != 0 {
+        if worst > enough {
+            break; // decided: the rest cannot lower it
+        }
         let i = inside.trailing_zeros() as usize;
         inside &= inside - 1;
         let limit = sys.mus[i] * sys.normal[i];
@@ -634,10 +659,10 @@ fn cluster_law(
 /// it: only its sign is used, to order the walk's options.
 fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
     let bottom = (1..j).rev().find(|&i| !mode.is_stuck(i)).unwrap_or(0);
-    let end = (j + 1..=sys.n)
+    let end = (j + 1..sys.n + 1)
         .find(|&i| !mode.is_stuck(i))
         .unwrap_or(sys.n + 1);
-    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0);
+    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
     let f_top = if end <= sys.n {
         -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
     } else {
@@ -698,8 +723,16 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     if let Some(res) = resolve_most_stuck(sys, req) {
         return res;
     }
+    resolve_by_walk(sys, req)
+}
+
+/// [`resolve`] where [`resolve_most_stuck`] does not decide: the walk (out
+/// of line, so that the usual switch runs through compact code).
+#[inline(never)]
+fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     let walk = Walk::new(sys, req);
     let mut search = Search {
+        mode: req.mode,
         best: None,
         count: 0,
         bound: true,
@@ -717,6 +750,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     let ambiguous = !walk.all_equal_friction()
         && (search.count > 1 || {
             let mut all = Search {
+                mode: req.mode,
                 best: None,
                 count: 0,
                 bound: false,
@@ -747,24 +781,25 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
 /// not covered (the walk decides).
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
-    let mut equal = true;
-    for j in 1..=sys.n {
-        if zero & (1 << j) != 0 {
-            equal &= sys.mus[j] == sys.muk[j];
-        }
-    }
     let breaking = zero & req.must_break;
-    if !equal || breaking.count_ones() > 2 {
+    if breaking.count_ones() > 2 {
         return None;
     }
     let mut mode = req.mode;
     let mut slips = [0usize; 2];
     let mut n_slips = 0;
-    for j in 1..=sys.n {
+    // One pass over the interfaces of `zero`, from the bottom.
+    let mut rest = zero;
+    while rest != 0 {
+        let j = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        if sys.mus[j] != sys.muk[j] {
+            return None;
+        }
         if breaking & (1 << j) != 0 {
             slips[n_slips] = j;
             n_slips += 1;
-        } else if zero & (1 << j) != 0 {
+        } else {
             mode.contact[j] = Contact::Stuck;
         }
     }
@@ -793,6 +828,8 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 /// were found; `bound`: drop branches that cannot beat the best on the
 /// rule's first two criteria; `limit`: stop after so many.
 struct Search {
+    /// The assignment being built (every contact of the walk's branch).
+    mode: Mode,
     best: Option<(Key, Mode)>,
     count: u32,
     bound: bool,
@@ -821,8 +858,11 @@ struct Walk<'a> {
     /// The same two counts without the interfaces of `must_break` (a
     /// branch that keeps none of those stuck can only gain these).
     remaining_unbroken: [[i32; 2]; MAX_BODIES + 1],
-    /// The contacts tried at each interface of `zero`, in the order tried.
+    /// The contacts tried at each interface, in the order tried: the first
+    /// `n_options` (three for an interface of `zero`, its kept contact
+    /// alone for the others).
     options: [[Contact; 3]; MAX_BODIES],
+    n_options: [usize; MAX_BODIES],
     /// The interfaces in `zero` with a contact to choose (bit j).
     zero_ifaces: u32,
 }
@@ -847,7 +887,7 @@ impl<'a> Walk<'a> {
         }
         let (mut remaining, mut remaining_kept) = ([0; MAX_BODIES + 1], [0; MAX_BODIES + 1]);
         let mut remaining_unbroken = [[0; 2]; MAX_BODIES + 1];
-        for j in (1..=sys.n).rev() {
+        for j in (1..sys.n + 1).rev() {
             let in_zero = index[j] != usize::MAX;
             remaining[j] = remaining[j + 1] + i32::from(in_zero);
             let kept = in_zero && req.was_stuck & (1 << j) != 0;
@@ -869,14 +909,19 @@ impl<'a> Walk<'a> {
         // the static limit there.
         use Contact::{SlipBackward as Back, SlipForward as Fwd, Stuck};
         let mut options = [[Stuck, Fwd, Back]; MAX_BODIES];
+        let mut n_options = [3; MAX_BODIES];
+        let zero_ifaces = (1..sys.n + 1)
+            .filter(|&j| index[j] != usize::MAX)
+            .fold(0, |m, j| m | (1 << j));
         let mut all_stuck = req.mode;
-        for j in 1..=sys.n {
-            if index[j] != usize::MAX {
-                all_stuck.contact[j] = Stuck;
+        for (j, c) in all_stuck.contact.iter_mut().enumerate() {
+            if zero_ifaces & (1 << j) != 0 {
+                *c = Stuck;
             }
         }
-        for j in 1..=sys.n {
+        for j in 1..sys.n + 1 {
             if index[j] == usize::MAX {
+                (options[j][0], n_options[j]) = (req.mode.contact[j], 1);
                 continue;
             }
             let breaks = req.must_break & (1 << j) != 0;
@@ -893,9 +938,6 @@ impl<'a> Walk<'a> {
                 (false, _) => [Stuck, Fwd, Back],
             };
         }
-        let zero_ifaces = (1..=sys.n)
-            .filter(|&j| index[j] != usize::MAX)
-            .fold(0, |m, j| m | (1 << j));
         Walk {
             sys,
             req,
@@ -904,24 +946,25 @@ impl<'a> Walk<'a> {
             remaining_kept,
             remaining_unbroken,
             options,
+            n_options,
             zero_ifaces,
         }
     }
 
     fn all_equal_friction(&self) -> bool {
-        (1..=self.sys.n)
+        (1..self.sys.n + 1)
             .filter(|&j| self.index[j] != usize::MAX)
             .all(|j| self.sys.mus[j] == self.sys.muk[j])
     }
 
     /// Walks the assignments into `search`.
     fn search(&self, search: &mut Search) {
-        let mut mode = self.req.mode;
+        search.mode = self.req.mode;
         let open = Open {
             bottom: 0,
             accel_below: 0.0,
         };
-        self.choose(1, open, &mut mode, (0, 0, false), search);
+        self.choose(1, open, (0, 0, false), search);
     }
 
     /// Whether every completion of a branch at interface `j` (`stuck` and
@@ -956,7 +999,6 @@ impl<'a> Walk<'a> {
         &self,
         j: usize,
         open: Open,
-        mode: &mut Mode,
         (stuck, kept, broken): (i32, i32, bool),
         search: &mut Search,
     ) {
@@ -970,24 +1012,18 @@ impl<'a> Walk<'a> {
         let n = self.sys.n;
         if j > n {
             search.tries += 1;
-            if self.close(open, n + 1, mode).is_some() {
+            if self.close(open, n + 1, &search.mode).is_some() {
                 search.count += 1;
-                let key = self.key(mode);
+                let key = self.key(&search.mode);
                 if search.best.is_none_or(|(b, _)| key < b) {
-                    search.best = Some((key, *mode));
+                    search.best = Some((key, search.mode));
                 }
             }
             return;
         }
         let in_zero = self.index[j] != usize::MAX;
-        let keep = [self.req.mode.contact[j]];
-        let options = if in_zero {
-            &self.options[j][..]
-        } else {
-            &keep[..]
-        };
-        for &c in options {
-            mode.contact[j] = c;
+        for &c in &self.options[j][..self.n_options[j]] {
+            search.mode.contact[j] = c;
             if c == Contact::Stuck {
                 let breaks = in_zero && self.req.must_break & (1 << j) != 0;
                 let was = in_zero && self.req.was_stuck & (1 << j) != 0;
@@ -996,28 +1032,29 @@ impl<'a> Walk<'a> {
                     kept + i32::from(was),
                     broken || breaks,
                 );
-                self.choose(j + 1, open, mode, counted, search);
+                self.choose(j + 1, open, counted, search);
             } else if self.beaten(j + 1, (stuck, kept, broken), search) {
                 // The bound of the next interface, before the cluster is
                 // closed: the branch is dropped as it would be there.
                 continue;
             } else if let Some(accel) = {
                 search.tries += 1;
-                self.close(open, j, mode)
+                self.close(open, j, &search.mode)
             } {
                 let next = Open {
                     bottom: j,
                     accel_below: accel,
                 };
-                self.choose(j + 1, next, mode, (stuck, kept, broken), search);
+                self.choose(j + 1, next, (stuck, kept, broken), search);
             }
         }
-        mode.contact[j] = self.req.mode.contact[j];
+        search.mode.contact[j] = self.req.mode.contact[j];
     }
 
     /// Closes the cluster from `open.bottom` to body `end - 1`: its
     /// absolute acceleration if it satisfies the contact law
     /// ([`cluster_law`]), `None` otherwise.
+    #[inline(always)]
     fn close(&self, open: Open, end: usize, mode: &Mode) -> Option<f64> {
         let ends = [open.bottom, end];
         let (accel, worst) = cluster_law(
@@ -1027,13 +1064,14 @@ impl<'a> Walk<'a> {
             self.req.load0,
             ends,
             open.accel_below,
+            CONSISTENCY_TOL,
         );
         (worst <= CONSISTENCY_TOL).then_some(accel)
     }
 
     fn key(&self, mode: &Mode) -> Key {
         let (mut stuck_bits, mut signs, mut stuck_ifaces, mut s) = (0u32, 0u32, 0u32, 0);
-        for j in 1..=self.sys.n {
+        for j in 1..self.sys.n + 1 {
             let k = self.index[j];
             if k == usize::MAX {
                 continue;

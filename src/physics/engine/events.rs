@@ -8,7 +8,9 @@ impl Simulator {
     /// Interfaces whose relative velocity is exactly zero (free ones excluded).
     pub(super) fn zero_mask(&self) -> u32 {
         let mut z = 0;
-        for j in 1..=self.sys.n {
+        // Half-open ranges on the event path: an inclusive range's
+        // iterator tests an extra flag at every step.
+        for j in 1..self.sys.n + 1 {
             if !self.sys.is_free(j) && self.v[j] == self.v[j - 1] {
                 z |= 1 << j;
             }
@@ -18,11 +20,11 @@ impl Simulator {
 
     /// Every interface of the stack (bit j).
     pub(super) fn all_interfaces(&self) -> u32 {
-        (1..=self.sys.n).fold(0, |m, j| m | (1 << j))
+        (2u32 << self.sys.n) - 2
     }
 
     pub(super) fn stuck_mask(&self) -> u32 {
-        (1..=self.sys.n)
+        (1..self.sys.n + 1)
             .filter(|&j| self.mode.is_stuck(j))
             .fold(0, |m, j| m | (1 << j))
     }
@@ -75,7 +77,7 @@ impl Simulator {
     pub(super) fn join_velocities(&mut self, joined: u32) {
         let n = self.sys.n;
         let mut start = 0;
-        for j in 1..=n + 1 {
+        for j in 1..n + 2 {
             let linked = j <= n && (self.mode.is_stuck(j) || joined & (1 << j) != 0);
             if linked {
                 continue;
@@ -107,29 +109,26 @@ impl Simulator {
         (self.ag_now, self.fext_now) = exc.at(self.t - t_ref);
     }
 
-    /// Guards of the current mode at the current state and inputs
-    /// (infinite for free interfaces and for j > n): positive while a
-    /// contact state holds. A stick's carries the resolver's consistency
-    /// slack ([`mode::stick_capacity`]), so that a stick it accepted starts
-    /// with a guard >= 0 (in a stack with equal friction a block riding on a
-    /// sliding one has |F| = mus N exactly; rounding alone would chatter).
-    pub(super) fn guards_now(&self) -> [f64; MAX_BODIES] {
-        let load0 = self.load0();
-        let mut g = [f64::INFINITY; MAX_BODIES];
-        for (j, gj) in g.iter_mut().enumerate().take(self.sys.n + 1).skip(1) {
-            let c = self.mode.contact[j];
-            *gj = match c {
-                Contact::Stuck => {
-                    let f = self.dynamics.force(j, &self.mode, load0);
-                    mode::stick_capacity(&self.sys, j) - f.abs()
-                }
-                Contact::SlipForward | Contact::SlipBackward => {
-                    c.slip_sign() * (self.v[j] - self.v[j - 1])
-                }
-                Contact::Free => f64::INFINITY,
-            };
+    /// The guard of interface `j` in the current mode at the current state
+    /// and inputs (`load0`, [`Simulator::load0`]; infinite for a free
+    /// interface): positive while its contact state holds. A stick's
+    /// carries the resolver's consistency slack ([`mode::stick_capacity`]),
+    /// so that a stick it accepted starts with a guard >= 0 (in a stack with
+    /// equal friction a block riding on a sliding one has |F| = mus N
+    /// exactly; rounding alone would chatter).
+    #[inline]
+    fn guard_now(&self, j: usize, load0: f64) -> f64 {
+        let c = self.mode.contact[j];
+        match c {
+            Contact::Stuck => {
+                let f = self.dynamics.force(j, &self.mode, load0);
+                mode::stick_capacity(&self.sys, j) - f.abs()
+            }
+            Contact::SlipForward | Contact::SlipBackward => {
+                c.slip_sign() * (self.v[j] - self.v[j - 1])
+            }
+            Contact::Free => f64::INFINITY,
         }
-        g
     }
 
     /// The guards that may fire at a jump of the inputs to `exc` now: all,
@@ -210,10 +209,15 @@ impl Simulator {
         forced: u32,
     ) -> bool {
         self.take_inputs_now(exc, t_ref);
-        let g = self.guards_now();
+        let load0 = self.load0();
         let (mut slip_zeroed, mut must_break) = (0, 0);
-        for j in 1..=self.sys.n {
-            let hit = forced & (1 << j) != 0 || (candidates & (1 << j) != 0 && g[j] <= 0.0);
+        // Only the interfaces asked about: a guard is computed where it
+        // decides (not for a forced one).
+        let mut asked = (forced | candidates) & self.all_interfaces();
+        while asked != 0 {
+            let j = asked.trailing_zeros() as usize;
+            asked &= asked - 1;
+            let hit = forced & (1 << j) != 0 || self.guard_now(j, load0) <= 0.0;
             if hit {
                 match self.mode.contact[j] {
                     Contact::Stuck => must_break |= 1 << j,
@@ -261,13 +265,30 @@ impl Simulator {
 /// The dynamics of the modes met so far: a switch back to a mode copies
 /// them instead of rebuilding them (derived data only: each entry is
 /// `Dynamics::new` of its mode, rebuilt identically on demand).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(super) struct DynamicsCache {
     keys: Vec<u32>,
     dynamics: Vec<Dynamics>,
     /// Entry replaced next once full.
     next: usize,
+    /// By a hash of the key, the entry last found or kept for it, plus one
+    /// (0: none): most loads look at one key, not at every key.
+    hint: [u8; HINT_SLOTS],
 }
+
+impl Default for DynamicsCache {
+    fn default() -> DynamicsCache {
+        DynamicsCache {
+            keys: Vec::new(),
+            dynamics: Vec::new(),
+            next: 0,
+            hint: [0; HINT_SLOTS],
+        }
+    }
+}
+
+/// Slots of [`DynamicsCache`]'s hint (a power of two).
+const HINT_SLOTS: usize = 128;
 
 /// How many modes' dynamics are kept (then the oldest is replaced).
 const DYNAMICS_CACHE_SIZE: usize = 64;
@@ -276,7 +297,7 @@ impl DynamicsCache {
     /// The mode as a number: two bits per interface, and the block count.
     fn key(mode: &Mode) -> u32 {
         let mut k = mode.n as u32;
-        for j in 1..=mode.n {
+        for j in 1..mode.n + 1 {
             k |= (mode.contact[j] as u32) << (2 * j + 2);
         }
         k
@@ -288,23 +309,51 @@ impl DynamicsCache {
         *self = DynamicsCache::default();
     }
 
+    /// The hint's slot of `key` (Fibonacci hashing).
+    fn slot(key: u32) -> usize {
+        (key.wrapping_mul(0x9E37_79B9) >> (32 - HINT_SLOTS.trailing_zeros())) as usize
+    }
+
     /// Sets `out` to the dynamics of `mode`, built if missing.
     pub(super) fn load(&mut self, sys: &System, mode: &Mode, out: &mut Dynamics) {
         let key = DynamicsCache::key(mode);
+        let slot = DynamicsCache::slot(key);
+        let hinted = usize::from(self.hint[slot]);
+        if hinted != 0 && self.keys[hinted - 1] == key {
+            *out = self.dynamics[hinted - 1];
+            return;
+        }
         if let Some(i) = self.keys.iter().position(|&k| k == key) {
+            self.hint[slot] = (i + 1) as u8;
             *out = self.dynamics[i];
             return;
         }
+        self.insert(key, sys, mode, out);
+    }
+
+    /// A mode met for the first time: its dynamics built, kept and copied
+    /// to `out` (out of line: a few dozen times per run).
+    #[cold]
+    #[inline(never)]
+    fn insert(&mut self, key: u32, sys: &System, mode: &Mode, out: &mut Dynamics) {
         let d = Dynamics::new(sys, mode);
         *out = d;
         if self.keys.len() < DYNAMICS_CACHE_SIZE {
+            if self.keys.is_empty() {
+                // Room for every entry at once: a growing vector would copy
+                // the dynamics kept so far at each doubling.
+                self.keys.reserve_exact(DYNAMICS_CACHE_SIZE);
+                self.dynamics.reserve_exact(DYNAMICS_CACHE_SIZE);
+            }
             self.keys.push(key);
             self.dynamics.push(d);
+            self.hint[DynamicsCache::slot(key)] = self.keys.len() as u8;
         } else {
             let i = self.next;
             self.keys[i] = key;
             self.dynamics[i] = d;
             self.next = (i + 1) % DYNAMICS_CACHE_SIZE;
+            self.hint[DynamicsCache::slot(key)] = (i + 1) as u8;
         }
     }
 }

@@ -29,10 +29,9 @@
 //! (`ω h <= 0.01`), where the contact is muted for one stretch only and an
 //! undecided search halves the stretch.
 
-use super::exact_map::degree;
 use super::poly::*;
 use super::*;
-use crate::physics::mode::Guard;
+use crate::physics::mode::{Guard, Moving};
 
 /// `u` and `v` of the structure's cluster over a stretch of length `h` from
 /// `z = [u, v, p, p']` as polynomials of degree `deg` in `s = τ / h`: the
@@ -217,10 +216,11 @@ impl Flow {
     }
 
     /// The guard `g`, not proved by [`Flow::holds`], as polynomials (a
-    /// stick band has two sides) written to `out`, without a side proved
-    /// positive over the stretch by its exact spread; returns how many
-    /// (written in place: no array of options moved per guard).
-    fn guard_polys(&mut self, sim: &Simulator, g: &Guard, out: &mut [Poly; 2]) -> usize {
+    /// stick band has two sides) written to `out` with their spreads,
+    /// without a side proved positive over the stretch by its exact spread;
+    /// returns how many (written in place: no array of options moved per
+    /// guard).
+    fn guard_polys(&mut self, sim: &Simulator, g: &Guard, out: &mut [(Poly, f64); 2]) -> usize {
         match *g {
             Guard::Slip { hi, lo, sign } => {
                 // `sign (velocity(hi) - velocity(lo))`: the clusters above
@@ -235,13 +235,13 @@ impl Flow {
                     ]
                 };
                 let vh = upper(hi);
-                let p = &mut out[0];
+                let (p, spread) = &mut out[0];
                 if lo == 0 {
                     for (ck, vk) in p.c.iter_mut().zip(&self.v.c) {
                         *ck = sign * (0.0 - vk);
                     }
-                    for k in 0..3 {
-                        p.c[k] = sign * (vh[k] - self.v.c[k]);
+                    for (k, vhk) in vh.iter().enumerate() {
+                        p.c[k] = sign * (vhk - self.v.c[k]);
                     }
                     p.deg = self.v.deg.max(2);
                 } else {
@@ -251,7 +251,8 @@ impl Flow {
                     }
                     p.deg = 2;
                 }
-                usize::from(p.c[0] <= p.spread(1.0))
+                *spread = p.spread(1.0);
+                usize::from(p.c[0] <= *spread)
             }
             Guard::Stuck {
                 mass_above,
@@ -262,12 +263,14 @@ impl Flow {
                 let a0 = self.accel_start;
                 let (accel, spread) = self.accel();
                 let mut n = 0;
+                // A side's spread is the acceleration's (`±1` times its
+                // coefficients past the first).
                 if a0 - spread <= lo {
-                    out[n] = accel.affine(1.0, -lo);
+                    out[n] = (accel.affine(1.0, -lo), spread);
                     n += 1;
                 }
                 if a0 + spread >= hi {
-                    out[n] = accel.affine(-1.0, hi);
+                    out[n] = (accel.affine(-1.0, hi), spread);
                     n += 1;
                 }
                 n
@@ -326,21 +329,16 @@ impl Simulator {
         let mut muted: u32 = 0;
         let mut fired_at_once: u32 = 0;
         let mut events = 0;
-        // One degree for every stretch: that of the longest, at the bare
-        // structure's rates (the highest of any mode).
-        let sys = &self.sys;
-        let deg = if sys.prescribed() {
-            degree(t1 - self.t, 0.0, 0.0)
-        } else {
-            let inv_mass = 1.0 / sys.mass[0];
-            degree(t1 - self.t, sys.k * inv_mass, sys.c * inv_mass)
-        };
+        // One degree for every stretch: that of the longest.
+        let deg = self.maps.stretch_degree(&self.sys, t1 - self.t);
         let mut flow = Flow::default();
+        // The guards' polynomials of every stretch, written in place.
+        let mut polys = [(Poly::default(), 0.0); 2];
         while self.t < t1 {
             let h = t1 - self.t;
             flow.start(self, exc, t_ref, h, deg);
             let tol = EVENT_TIME_TOL / h;
-            let next = match self.next_event(&mut flow, muted, tol) {
+            let next = match self.next_event(&mut flow, &mut polys, muted, tol) {
                 Ok(next) => next,
                 Err(Undecided) if depth == 0 => return self.fine_stretches(t1, piece),
                 Err(Undecided) if !ends_only => return self.split_stretch(t1, piece, depth),
@@ -389,6 +387,8 @@ impl Simulator {
     }
 
     /// The rest of a substep to `t1` in equal stretches of at most `h_fine`.
+    #[cold]
+    #[inline(never)]
     fn fine_stretches(&mut self, t1: f64, piece: &Piece) {
         let t0 = self.t;
         let n = substeps(t1 - t0, self.h_fine) as usize;
@@ -403,6 +403,8 @@ impl Simulator {
     }
 
     /// The stretch to `t1` in two halves, one level deeper.
+    #[cold]
+    #[inline(never)]
     fn split_stretch(&mut self, t1: f64, piece: &Piece, depth: u32) {
         let mid = self.t + 0.5 * (t1 - self.t);
         self.exact_stretch(mid, piece, depth + 1);
@@ -411,12 +413,17 @@ impl Simulator {
 
     /// The first zero over the stretch of `flow` among the guards of the
     /// mode that are not `muted`, or the guards to fire at once.
-    fn next_event(&self, flow: &mut Flow, muted: u32, tol: f64) -> Result<Next, Undecided> {
+    fn next_event(
+        &self,
+        flow: &mut Flow,
+        polys: &mut [(Poly, f64); 2],
+        muted: u32,
+        tol: f64,
+    ) -> Result<Next, Undecided> {
         let d = &self.dynamics;
         let mut ifaces = d.changing_guards;
         let mut earliest: Option<(f64, usize)> = None;
         let mut at_once = 0u32;
-        let mut polys = [Poly::default(); 2];
         // Every stick of the structure's cluster at once: the acceleration
         // kept inside the band inside all of them (then each guard's own
         // test, on a wider band, returns no polynomial either).
@@ -424,20 +431,25 @@ impl Simulator {
             let (a0, bound) = (flow.accel_start, flow.accel_spread_bound);
             a0 - bound > lo && a0 + bound < hi
         });
+        let skipped = if sticks_hold {
+            muted | d.stuck_guards
+        } else {
+            muted
+        };
         for g in &d.guards[..d.n_guards] {
             let j = ifaces.trailing_zeros() as usize;
             ifaces &= ifaces - 1;
-            if muted & (1 << j) != 0 || (sticks_hold && matches!(g, Guard::Stuck { .. })) {
+            if skipped & (1 << j) != 0 {
                 continue;
             }
             if flow.holds(self, g) {
                 continue;
             }
-            let n_polys = flow.guard_polys(self, g, &mut polys);
-            for poly in &polys[..n_polys] {
+            let n_polys = flow.guard_polys(self, g, polys);
+            for (poly, scale) in &polys[..n_polys] {
                 // A guard at zero (a contact that has just switched) must
                 // grow from it, or it fires at once.
-                let scale = poly.spread(1.0);
+                let scale = *scale;
                 let grown;
                 let poly = if poly.c[0] > 1e-12 * scale {
                     poly
@@ -448,7 +460,7 @@ impl Simulator {
                     at_once |= 1 << j;
                     continue;
                 };
-                let (g0, d0) = poly.eval_d(0.0);
+                let (g0, d0) = poly.start();
                 // Only zeros before the earliest one found so far matter.
                 let end = earliest.map_or(1.0, |(s, _)| s);
                 let start = [0.0, g0.max(0.0), d0];
@@ -534,30 +546,13 @@ impl Simulator {
             let watched = d.changing_guards & !muted & (1 << j) != 0;
             if watched && self.mode.contact[j] != Contact::Free {
                 peak_slip[j] = peak_slip[j].max(slip0.abs()).max(slip1.abs());
-            } else if lo == 0 {
-                // slip(s) = slip0 + (cluster hi's displacement) - (u0(s) - u0(0)).
-                let (h, rel) = (flow.h, d.accel_const[hi] - flow.ag0);
-                let upper = [
-                    self.v[d.bottom[hi]] * h,
-                    0.5 * rel * h * h,
-                    -flow.ag_rate * h * h * h / 6.0,
-                ];
-                let spread = flow.u_spread + upper.iter().map(|x| x.abs()).sum::<f64>();
-                if slip0.abs().max(slip1.abs()) > peak_slip[j]
-                    || slip0.abs() + spread > peak_slip[j]
-                {
-                    let mut c = flow.u.c.map(|x| -x);
-                    c[0] = slip0;
-                    for k in 0..3 {
-                        c[k + 1] += upper[k];
-                    }
-                    let slip = Poly::new(c, flow.u.deg.max(3));
-                    let ends = [slip1, spread];
-                    raise_peak_over(&mut peak_slip[j], &slip, ends, s, peak_tol, ends_only)?;
-                }
             } else {
-                let (vrel0, vrel1) = (self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]);
-                hermite::raise_peak(&mut peak_slip[j], slip0, vrel0, slip1, vrel1, tau);
+                let ends = [
+                    [slip0, slip1],
+                    [self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]],
+                ];
+                let peak = &mut peak_slip[j];
+                self.raise_unwatched_slip(peak, flow, *m, ends, [s, peak_tol], ends_only)?;
             }
         }
 
@@ -584,6 +579,47 @@ impl Simulator {
         self.peak_slip = peak_slip;
         self.t += tau;
         self.stats.steps += 1;
+        Ok(())
+    }
+    /// The peak of a slip whose guard was not searched over the stretch
+    /// (muted, or a free interface), up to `s`: `ends` are its slip and
+    /// relative velocity at both ends. Out of line: most stretches watch
+    /// every slip (its peak is then at an end), and the event path's code
+    /// stays small.
+    #[cold]
+    #[inline(never)]
+    fn raise_unwatched_slip(
+        &self,
+        peak: &mut f64,
+        flow: &Flow,
+        m: Moving,
+        [[slip0, slip1], [vrel0, vrel1]]: [[f64; 2]; 2],
+        [s, peak_tol]: [f64; 2],
+        ends_only: bool,
+    ) -> Result<(), Undecided> {
+        let (d, hi) = (&self.dynamics, m.hi);
+        if m.lo == 0 {
+            // slip(s) = slip0 + (cluster hi's displacement) - (u0(s) - u0(0)).
+            let (h, rel) = (flow.h, d.accel_const[hi] - flow.ag0);
+            let upper = [
+                self.v[d.bottom[hi]] * h,
+                0.5 * rel * h * h,
+                -flow.ag_rate * h * h * h / 6.0,
+            ];
+            let spread = flow.u_spread + upper.iter().map(|x| x.abs()).sum::<f64>();
+            if slip0.abs().max(slip1.abs()) > *peak || slip0.abs() + spread > *peak {
+                let mut c = flow.u.c.map(|x| -x);
+                c[0] = slip0;
+                for k in 0..3 {
+                    c[k + 1] += upper[k];
+                }
+                let slip = Poly::new(c, flow.u.deg.max(3));
+                raise_peak_over(peak, &slip, [slip1, spread], s, peak_tol, ends_only)?;
+            }
+        } else {
+            let tau = if s >= 1.0 { flow.h } else { s * flow.h };
+            hermite::raise_peak(peak, slip0, vrel0, slip1, vrel1, tau);
+        }
         Ok(())
     }
 }

@@ -37,13 +37,35 @@ const RECIPROCALS: [f64; 2 * TERMS + 2] = {
     r
 };
 
+/// `FALLING[m][k] = (k + 1) (k + 2) ... (k + m)`, for the derivative
+/// bounds (exact integers: the products the build took one by one).
+const FALLING: [[f64; TERMS + 1]; 6] = {
+    let mut f = [[1.0; TERMS + 1]; 6];
+    let mut m = 1;
+    while m < 6 {
+        let mut k = 0;
+        while k <= TERMS {
+            let mut x = k + 1;
+            let mut p = 1.0;
+            while x <= k + m {
+                p *= x as f64;
+                x += 1;
+            }
+            f[m][k] = p;
+            k += 1;
+        }
+        m += 1;
+    }
+    f
+};
+
 /// Degree at which the Taylor terms of `exp(A h)` fall below 1e-20: they
 /// shrink as `ρ^k / k!` with `ρ = h max(ω + c/m, 1)` (the oscillator's rate
 /// and the forcing's polynomial part).
 pub(super) fn degree(h: f64, w2: f64, cm: f64) -> usize {
     let rho = h * (w2.sqrt() + cm).max(1.0);
     let mut term = 1.0;
-    for k in 1..=MAX_DEGREE {
+    for k in 1..MAX_DEGREE + 1 {
         term *= rho / k as f64;
         if term < 1e-20 && k >= 4 {
             return k;
@@ -117,14 +139,16 @@ impl ExactMap {
         let n_terms = degree + 6;
         let mut rows = [[[0.0; 4]; 2]; TERMS + 1];
         rows[0] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
-        for k in 1..=n_terms {
+        // (Half-open ranges: an inclusive range's iterator tests a flag at
+        // every step.)
+        for k in 1..n_terms + 1 {
             let f = h / k as f64;
             rows[k] =
                 rows[k - 1].map(|x| [-w2 * x[1] * f, (x[0] - cm * x[1]) * f, x[1] * f, x[2] * f]);
         }
         let (mut u, mut v, mut int_u) = ([0.0; 4], [0.0; 4], [0.0; 4]);
         // Sum the small terms first.
-        for k in (0..=degree).rev() {
+        for k in (0..degree + 1).rev() {
             for i in 0..4 {
                 u[i] += rows[k][0][i];
                 v[i] += rows[k][1][i];
@@ -135,9 +159,9 @@ impl ExactMap {
         // ∫_0^h v² = h Σ_ij (r_i z)(r_j z) / (i + j + 1): the inner sums
         // over j first, w[i] = Σ_j r_j / (i + j + 1).
         let mut q = [[0.0; 4]; 4];
-        for i in (0..=degree).rev() {
+        for i in (0..degree + 1).rev() {
             let mut w = [0.0; 4];
-            for j in (0..=degree).rev() {
+            for j in (0..degree + 1).rev() {
                 for (ws, r) in w.iter_mut().zip(rows[j][1]) {
                     *ws += r * RECIPROCALS[i + j];
                 }
@@ -167,8 +191,8 @@ impl ExactMap {
         // of it); the factor covers rounding.
         let mut bound = [[0.0; 4]; 5];
         for (b, m) in bound.iter_mut().zip(1..=5usize) {
-            for k in (0..=n_terms - m).rev() {
-                let falling: f64 = ((k + 1)..=(k + m)).map(|x| x as f64).product();
+            for k in (0..n_terms - m + 1).rev() {
+                let falling = FALLING[m][k];
                 for i in 0..4 {
                     b[i] += rows[m + k][1][i].abs() * falling;
                 }
@@ -244,6 +268,9 @@ pub(super) struct MapCache {
     next: usize,
     /// The map found last.
     last: usize,
+    /// The last stretch length asked of [`MapCache::stretch_degree`] (its
+    /// bits) and its degree: most substeps have the same length.
+    last_degree: Option<(u64, usize)>,
 }
 
 /// How many maps are kept (then the oldest is replaced).
@@ -266,6 +293,11 @@ impl MapCache {
         }
         let map = ExactMap::new(sys, mass, h);
         self.last = if self.maps.len() < CACHE_SIZE {
+            if self.maps.is_empty() {
+                // Room for every map at once (no copies as the vector grows).
+                self.maps.reserve_exact(CACHE_SIZE);
+                self.keys.reserve_exact(CACHE_SIZE);
+            }
             self.maps.push(map);
             self.keys.push(key);
             self.maps.len() - 1
@@ -281,6 +313,25 @@ impl MapCache {
 
     pub(super) fn get(&self, i: usize) -> &ExactMap {
         &self.maps[i]
+    }
+
+    /// The degree of the event path's Taylor polynomials over a stretch of
+    /// length `h`: [`degree`] at the bare structure's rates (the highest of
+    /// any mode), remembered for the last length asked.
+    pub(super) fn stretch_degree(&mut self, sys: &System, h: f64) -> usize {
+        if let Some((bits, deg)) = self.last_degree {
+            if bits == h.to_bits() {
+                return deg;
+            }
+        }
+        let deg = if sys.prescribed() {
+            degree(h, 0.0, 0.0)
+        } else {
+            let inv_mass = 1.0 / sys.mass[0];
+            degree(h, sys.k * inv_mass, sys.c * inv_mass)
+        };
+        self.last_degree = Some((h.to_bits(), deg));
+        deg
     }
 }
 

@@ -42,7 +42,8 @@ impl Poly {
     pub(super) fn bounds(&self) -> [f64; 2] {
         let (mut m2, mut m3) = (0.0, 0.0);
         let mut kf = 2.0;
-        for c in self.c.iter().take(self.deg + 1).skip(2) {
+        let top = self.deg + 1;
+        for c in &self.c[top.min(2)..top] {
             let term = kf * (kf - 1.0) * c.abs();
             m2 += term;
             m3 += term * (kf - 2.0);
@@ -75,8 +76,8 @@ impl Poly {
     /// the zeros of `p` in (0, 1]. `None` when the first coefficient left is
     /// negative: the guard does not grow from its zero.
     pub(super) fn past_zero_start(&self) -> Option<Poly> {
-        let scale: f64 = (1..=self.deg).map(|k| self.c[k].abs()).sum();
-        let m = (0..=self.deg.min(3)).find(|&k| self.c[k].abs() > 1e-12 * scale)?;
+        let scale: f64 = self.c[1..self.deg + 1].iter().map(|c| c.abs()).sum();
+        let m = (0..self.deg.min(3) + 1).find(|&k| self.c[k].abs() > 1e-12 * scale)?;
         if self.c[m] < 0.0 {
             return None;
         }
@@ -107,9 +108,17 @@ impl Poly {
         (y, d)
     }
 
+    /// Value and derivative at `s = 0`, its first two coefficients (those
+    /// of [`Poly::eval_d`] at 0 for finite coefficients, without the
+    /// evaluation).
+    #[inline]
+    pub(super) fn start(&self) -> (f64, f64) {
+        (self.c[0], if self.deg >= 1 { self.c[1] } else { 0.0 })
+    }
+
     pub(super) fn derivative(&self) -> Poly {
         let mut c = [0.0; N_COEF];
-        for k in 1..=self.deg {
+        for k in 1..self.deg + 1 {
             c[k - 1] = k as f64 * self.c[k];
         }
         Poly::new(c, self.deg.max(1) - 1)
@@ -126,6 +135,7 @@ pub(super) struct Undecided;
 /// over `(a, e]` is proved. `tol` is the width below which a stretch is
 /// not split further: a sign change there is the zero, and a dip below zero
 /// and back inside it is not seen (a graze).
+#[inline]
 pub(super) fn first_zero(
     g: &Poly,
     [m2, m3]: [f64; 2],
@@ -205,6 +215,7 @@ fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f
 /// the value at `e`), or where `y'` changes sign. `spread` bounds
 /// `|y - y(0)|` over `[0, 1]` (`Poly::spread`): when it keeps `|y|` below
 /// the peak, nothing else is computed.
+#[inline]
 pub(super) fn raise_peak_exact(
     peak: &mut f64,
     y: &Poly,
@@ -219,6 +230,14 @@ pub(super) fn raise_peak_exact(
     if y.c[0].abs() + spread <= *peak || y.c[0].abs() + y.spread(e) <= *peak {
         return Ok(());
     }
+    raise_peak_inside(peak, y, e, tol)
+}
+
+/// [`raise_peak_exact`] where its bounds leave an interior peak possible:
+/// out of line, so that the usual case (the bounds decide) is a few
+/// instructions at its callers.
+#[inline(never)]
+fn raise_peak_inside(peak: &mut f64, y: &Poly, e: f64, tol: f64) -> Result<(), Undecided> {
     let dy = y.derivative();
     let dy_spread = dy.spread(e);
     if dy.c[0].abs() > dy_spread {
@@ -288,7 +307,8 @@ pub(super) const INV: [f64; N_COEF + 1] = {
 /// `∫_0^s p(σ) dσ`.
 pub(super) fn integral(p: &Poly, s: f64) -> f64 {
     let mut total = 0.0;
-    for k in (0..=p.deg).rev() {
+    // (Half-open: an inclusive range's iterator tests a flag per step.)
+    for k in (0..p.deg + 1).rev() {
         total = total * s + p.c[k] * INV[k];
     }
     total * s
