@@ -136,7 +136,8 @@ pub fn advance_with_record<S: Stepper>(
         stop: 0,
         after_end: record.first_after(t_end).min(n),
         promise: extra.fext_rate == 0.0 && extra.fext.is_finite() && dt > 0.0 && dt.is_finite(),
-        last_whole: false,
+        continue_stop: 0,
+        steady: extra.ag_rate == 0.0 && extra.fext_rate == 0.0,
         yielded: false,
         done: false,
     };
@@ -172,9 +173,12 @@ struct RecordPieces<'a> {
     /// first interval positive and finite: a whole interval as long as it
     /// may be promised to continue the last one.
     promise: bool,
-    /// The piece yielded last was a whole interval as long as the first
-    /// (and `promise`).
-    last_whole: bool,
+    /// `stop` while the piece yielded last was a whole interval as long as
+    /// the first (and `promise`), else 0: the whole intervals before it
+    /// may be promised to continue the last one.
+    continue_stop: usize,
+    /// `extra` is constant (no rates).
+    steady: bool,
     /// A piece was yielded (or the lean path will yield one next): the
     /// pieces end once `t` reaches `t_end`.
     yielded: bool,
@@ -249,7 +253,7 @@ impl RecordPieces<'_> {
             }
             piece
         };
-        self.last_whole = false;
+        self.continue_stop = 0;
         self.yielded = true;
         self.align();
         Some((t1, exc))
@@ -271,28 +275,32 @@ impl PieceSource for RecordPieces<'_> {
             return self.partial();
         }
         let (a, slope, uniform) = self.whole(i);
-        self.last_whole = uniform & self.promise;
+        self.continue_stop = if uniform & self.promise { self.stop } else { 0 };
         let (t1, exc) = self.lean(i, a, slope);
         (self.t, self.next_sample) = (t1, i + 1);
         Some((t1, exc))
     }
 
     #[inline(always)]
-    fn next_continuing(&mut self) -> Option<(f64, Excitation)> {
+    fn next_continuing(&mut self) -> Option<(f64, f64, f64)> {
         let i = self.next_sample;
-        if i >= self.stop || !self.last_whole {
+        if i >= self.continue_stop {
             return None;
         }
         // A whole sample interval from its first sample, ending at or
-        // before `t_end`, as long as the last (the usual case).
-        let (a, slope, uniform) = self.whole(i);
-        let (t1, exc) = self.lean(i, a, slope);
+        // before `t_end`, as long as the last (the usual case): its slope
+        // by the product (the division only where `whole` needs it).
+        let ([t0, t1], [a0, a1]) = (pair(self.time, i), pair(self.accel, i));
+        if !same_up_to_rounding(t1 - t0, self.dt, t1) {
+            return None;
+        }
+        let exc = self.excitation(a0, (a1 - a0) * self.inv_dt);
         // As `Excitation::check` (Fext is finite by the promise).
-        if !(uniform && (exc.ag + exc.ag_rate + t1).is_finite()) {
+        if !(exc.ag + exc.ag_rate + t1).is_finite() {
             return None;
         }
         (self.t, self.next_sample) = (t1, i + 1);
-        Some((t1, exc))
+        Some((t1, exc.ag, exc.ag_rate))
     }
 }
 
@@ -309,6 +317,15 @@ impl RecordPieces<'_> {
     #[inline(always)]
     fn excitation(&self, a: f64, slope: f64) -> Excitation {
         let (e, dt) = (&self.extra, self.t - self.t_start);
+        if self.steady {
+            // `extra` constant: its rates' terms are zeros.
+            return Excitation {
+                ag: self.scale * a + e.ag,
+                ag_rate: self.scale * slope,
+                fext: e.fext,
+                fext_rate: 0.0,
+            };
+        }
         Excitation {
             ag: self.scale * a + e.ag + e.ag_rate * dt,
             ag_rate: self.scale * slope + e.ag_rate,

@@ -67,11 +67,13 @@ pub trait PieceSource {
     /// The next piece only where the source promises that it continues its
     /// previous one as a record's next sample does (as long as it up to the
     /// rounding of the times, 1e-15 relative, `Fext` constant, every value
-    /// finite): the driver then keeps its substeps without checking it
-    /// again. `None` takes nothing (the driver asks `next_piece`). A lean
-    /// method of its own, so that the common piece is built in registers.
+    /// finite): its end, `ag` and `ag_rate` (`Fext` and its zero rate stay
+    /// as they were). The driver then keeps its substeps without checking
+    /// it again. `None` takes nothing (the driver asks `next_piece`). A
+    /// lean method of its own, so that the common piece is built in
+    /// registers.
     #[inline(always)]
-    fn next_continuing(&mut self) -> Option<(f64, Excitation)> {
+    fn next_continuing(&mut self) -> Option<(f64, f64, f64)> {
         None
     }
 }

@@ -223,24 +223,13 @@ impl Simulator {
 
         'steps: loop {
             if cur.i > cur.n {
-                if let Some((t_end, exc)) = pieces.next_continuing() {
+                if let Some((t_end, ag, ag_rate)) = pieces.next_continuing() {
                     // The source's promise: a record's next sample, as long
-                    // as the last, Fext constant, every value finite.
-                    let Excitation {
-                        ag,
-                        ag_rate,
-                        fext,
-                        fext_rate,
-                    } = exc;
+                    // as the last, Fext constant (as it is), every value
+                    // finite.
                     (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
                     (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
-                    (cur.exc.fext, cur.exc.fext_rate) = (fext, fext_rate);
-                    inp = Inputs {
-                        ag,
-                        fext,
-                        ag_rate,
-                        fext_rate,
-                    };
+                    (inp.ag, inp.ag_rate) = (ag, ag_rate);
                     continue;
                 }
                 let Some((t_end, exc)) = pieces.next_piece() else {
