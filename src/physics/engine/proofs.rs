@@ -120,12 +120,20 @@ pub(super) fn structure_peaks_proved(
 ) -> [bool; 2] {
     let sag = 0.125 * h * h * s3;
     let (e0, e1) = (z[0].abs(), u1.abs());
-    let ends = if e0 > e1 { e0 } else { e1 };
-    let u_proved = ends + sag * map.one_over_three <= *peak_u0
-        || raise_peak_proved(peak_u0, [z[0], z[1], u1, v1], h, s3, || map.sup_v(2, z));
+    let ends_u = if e0 > e1 { e0 } else { e1 };
     let (e0, e1) = (a0.abs(), a1.abs());
-    let ends = if e0 > e1 { e0 } else { e1 };
-    let a_proved = ends + sag <= *peak_a0 || {
+    let ends_a = if e0 > e1 { e0 } else { e1 };
+    let quick = [
+        ends_u + sag * map.one_over_three <= *peak_u0,
+        ends_a + sag <= *peak_a0,
+    ];
+    // Both at once (one branch on the usual path).
+    if quick[0] & quick[1] {
+        return quick;
+    }
+    let u_proved =
+        quick[0] || raise_peak_proved(peak_u0, [z[0], z[1], u1, v1], h, s3, || map.sup_v(2, z));
+    let a_proved = quick[1] || {
         let [j0, j1] = jerks();
         let fifth = map.five_over_three * s3;
         raise_peak_proved(peak_a0, [a0, j0, a1, j1], h, fifth, || map.sup_v(4, z))

@@ -226,45 +226,48 @@ impl Simulator {
                 if let Some((t_end, ag, ag_rate)) = pieces.next_continuing() {
                     // The source's promise: a record's next sample, as long
                     // as the last, Fext constant (as it is), every value
-                    // finite.
+                    // finite. Its first substep follows at once (the last
+                    // piece had one at least).
+                    debug_assert!(cur.n >= 1);
                     (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
                     (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
                     (inp.ag, inp.ag_rate) = (ag, ag_rate);
+                } else {
+                    let Some((t_end, exc)) = pieces.next_piece() else {
+                        break;
+                    };
+                    // A jump of Fext, or a bad value: the piece is begun anew;
+                    // on a prescribed support a jump of ag too, or any Fext.
+                    let on_support =
+                        prescribed && (is_jump(exc.ag, inp.ag) || exc.fext_rate != 0.0);
+                    if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() || on_support {
+                        pending = Some((t_end, exc));
+                        break;
+                    }
+                    if cur.same_length(t0, t_end) {
+                        // A record's next sample: the same substeps, map and rows.
+                        (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
+                    } else {
+                        cur = Piece::new(t0, t_end, &exc, h_max);
+                        sums.flush(&rows, mass, load_accel, &mut work);
+                        let hc = canonical_length(cur.h);
+                        if hc != map.h {
+                            let i = maps.index(sys, mass, hc);
+                            map = maps.get(i);
+                            (w2, cm) = (map.w2, map.cm);
+                        }
+                        rows = Rows::new(map, cur.h);
+                        (row_u, row_v) = (rows.u, rows.v);
+                    }
+                    // A0 carries over: it is continuous (a jump of Fext ends the run).
+                    inp = Inputs {
+                        ag: exc.ag,
+                        fext: exc.fext,
+                        ag_rate: exc.ag_rate,
+                        fext_rate: exc.fext_rate,
+                    };
                     continue;
                 }
-                let Some((t_end, exc)) = pieces.next_piece() else {
-                    break;
-                };
-                // A jump of Fext, or a bad value: the piece is begun anew;
-                // on a prescribed support a jump of ag too, or any Fext.
-                let on_support = prescribed && (is_jump(exc.ag, inp.ag) || exc.fext_rate != 0.0);
-                if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() || on_support {
-                    pending = Some((t_end, exc));
-                    break;
-                }
-                if cur.same_length(t0, t_end) {
-                    // A record's next sample: the same substeps, map and rows.
-                    (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
-                } else {
-                    cur = Piece::new(t0, t_end, &exc, h_max);
-                    sums.flush(&rows, mass, load_accel, &mut work);
-                    let hc = canonical_length(cur.h);
-                    if hc != map.h {
-                        let i = maps.index(sys, mass, hc);
-                        map = maps.get(i);
-                        (w2, cm) = (map.w2, map.cm);
-                    }
-                    rows = Rows::new(map, cur.h);
-                    (row_u, row_v) = (rows.u, rows.v);
-                }
-                // A0 carries over: it is continuous (a jump of Fext ends the run).
-                inp = Inputs {
-                    ag: exc.ag,
-                    fext: exc.fext,
-                    ag_rate: exc.ag_rate,
-                    fext_rate: exc.fext_rate,
-                };
-                continue;
             }
             // Every substep of a piece is `cur.h` long; the last ends at the
             // piece's end, which differs from `t0 + h` only by the rounding
