@@ -101,8 +101,9 @@ pub(super) fn slip_guard_proved(
 }
 
 /// Raises the structure's peaks of |u0| and |A0| over the substep from `z`
-/// (end values `u1`, `v1`; the absolute acceleration `a0` and `a1` at the
-/// ends, its rates `jerks()`) where that is proved; returns which were.
+/// (with `|z|`; end values `u1`, `v1`; the absolute acceleration `a0` and
+/// `a1` at the ends, its rates `jerks()`) where that is proved; returns
+/// which were.
 /// Quick tests first: the larger end plus `h²/8 sup|y''|` (`sup|u''| =
 /// sup|v'|`, `sup|A''| = sup|v'''| <= s3`); then the cubic bounds with the
 /// rates.
@@ -110,7 +111,7 @@ pub(super) fn slip_guard_proved(
 #[inline(always)]
 pub(super) fn structure_peaks_proved(
     map: &ExactMap,
-    z: &[f64; 4],
+    [z, z_abs]: [&[f64; 4]; 2],
     [u1, v1]: [f64; 2],
     [a0, a1]: [f64; 2],
     jerks: impl FnOnce() -> [f64; 2],
@@ -119,7 +120,7 @@ pub(super) fn structure_peaks_proved(
     [peak_u0, peak_a0]: [&mut f64; 2],
 ) -> [bool; 2] {
     let sag = 0.125 * h * h * s3;
-    let (e0, e1) = (z[0].abs(), u1.abs());
+    let (e0, e1) = (z_abs[0], u1.abs());
     let ends_u = if e0 > e1 { e0 } else { e1 };
     let (e0, e1) = (a0.abs(), a1.abs());
     let ends_a = if e0 > e1 { e0 } else { e1 };

@@ -284,7 +284,8 @@ impl Simulator {
             let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
             let (ag1, fext1) = (inp.ag + inp.ag_rate * hs, inp.fext + inp.fext_rate * hs);
             let a1 = load_accel + rule.accel(ag1, fext1) - w2 * u1 - cm * v1;
-            let s3 = map.sup_v(3, &z);
+            let z_abs = z.map(f64::abs);
+            let s3 = map.sup_v_abs(3, &z_abs);
             // Stuck interfaces: the absolute acceleration stays in the band.
             // Its rate: A' = Fext'/m - w2 v - cm (A - ag).
             let ends = [a_abs, a1];
@@ -307,7 +308,11 @@ impl Simulator {
                 du[c] = hs * vel[c] + 0.5 * hs * hs * accel_c[c] - g2;
                 v_end[c] = vel[c] + hs * accel_c[c] - g1;
             }
-            let s2 = if NC > 1 { map.sup_v(2, &z) } else { 0.0 };
+            let s2 = if NC > 1 {
+                map.sup_v_abs(2, &z_abs)
+            } else {
+                0.0
+            };
             for m in 0..NC - 1 {
                 let sign = slip_sign[m];
                 if sign == 0.0 {
@@ -333,7 +338,7 @@ impl Simulator {
             // one inside, on the polynomials.
             let peaks = [&mut peak_u0, &mut peak_a0];
             let [u_proved, a_proved] =
-                structure_peaks_proved(map, &z, [u1, v1], ends, jerks, hs, s3, peaks);
+                structure_peaks_proved(map, [&z, &z_abs], [u1, v1], ends, jerks, hs, s3, peaks);
             if !(u_proved && a_proved) {
                 let peaks = [
                     (!u_proved).then_some(&mut peak_u0),
