@@ -208,7 +208,7 @@ impl RecordPieces<'_> {
         } else {
             self.t_end
         };
-        let exc = self.excitation(a, slope);
+        let exc = self.excitation(self.t, a, slope);
         self.t = t1;
         self.done = t1 >= self.t_end;
         if piece_end <= t1 {
@@ -282,25 +282,34 @@ impl PieceSource for RecordPieces<'_> {
     }
 
     #[inline(always)]
-    fn next_continuing(&mut self) -> Option<(f64, f64, f64)> {
-        let i = self.next_sample;
-        if i >= self.continue_stop {
-            return None;
-        }
+    fn promised(&self) -> usize {
+        self.continue_stop.saturating_sub(self.next_sample)
+    }
+
+    #[inline(always)]
+    fn continuing(&self, k: usize) -> Option<(f64, f64, f64)> {
         // A whole sample interval from its first sample, ending at or
-        // before `t_end`, as long as the last (the usual case): its slope
+        // before `t_end` (the usual case); as long as the last, its slope
         // by the product (the division only where `whole` needs it).
+        let i = self.next_sample + k;
         let ([t0, t1], [a0, a1]) = (pair(self.time, i), pair(self.accel, i));
         if !same_up_to_rounding(t1 - t0, self.dt, t1) {
             return None;
         }
-        let exc = self.excitation(a0, (a1 - a0) * self.inv_dt);
+        let exc = self.excitation(t0, a0, (a1 - a0) * self.inv_dt);
         // As `Excitation::check` (Fext is finite by the promise).
         if !(exc.ag + exc.ag_rate + t1).is_finite() {
             return None;
         }
-        (self.t, self.next_sample) = (t1, i + 1);
         Some((t1, exc.ag, exc.ag_rate))
+    }
+
+    #[inline(always)]
+    fn skip(&mut self, k: usize) {
+        if k > 0 {
+            self.next_sample += k;
+            self.t = self.time[self.next_sample - 1];
+        }
     }
 }
 
@@ -309,14 +318,14 @@ impl RecordPieces<'_> {
     /// its start): `piece` without its cuts, and without moving on.
     #[inline(always)]
     fn lean(&self, i: usize, a: f64, slope: f64) -> (f64, Excitation) {
-        (pair(self.time, i)[1], self.excitation(a, slope))
+        (pair(self.time, i)[1], self.excitation(self.t, a, slope))
     }
 
-    /// `scale * record + extra` from `self.t`, where the record is `a`
-    /// with slope `slope`.
+    /// `scale * record + extra` from `t`, where the record is `a` with
+    /// slope `slope`.
     #[inline(always)]
-    fn excitation(&self, a: f64, slope: f64) -> Excitation {
-        let (e, dt) = (&self.extra, self.t - self.t_start);
+    fn excitation(&self, t: f64, a: f64, slope: f64) -> Excitation {
+        let (e, dt) = (&self.extra, t - self.t_start);
         if self.steady {
             // `extra` constant: its rates' terms are zeros.
             return Excitation {

@@ -220,10 +220,19 @@ impl Simulator {
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
         let mut taken = 0u64;
         let mut pending = None;
+        // The pieces the source promised to continue the last: `lean[0]`
+        // of `lean[1]` taken (the source is told at the end).
+        let mut lean = [0, pieces.promised()];
 
         'steps: loop {
             if cur.i > cur.n {
-                if let Some((t_end, ag, ag_rate)) = pieces.next_continuing() {
+                let next = if lean[0] < lean[1] {
+                    pieces.continuing(lean[0])
+                } else {
+                    None
+                };
+                if let Some((t_end, ag, ag_rate)) = next {
+                    lean[0] += 1;
                     // The source's promise: a record's next sample, as long
                     // as the last, Fext constant (as it is), every value
                     // finite. Its first substep follows at once (the last
@@ -233,6 +242,8 @@ impl Simulator {
                     (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
                     (inp.ag, inp.ag_rate) = (ag, ag_rate);
                 } else {
+                    pieces.skip(lean[0]);
+                    lean = [0, 0];
                     let Some((t_end, exc)) = pieces.next_piece() else {
                         break;
                     };
@@ -259,6 +270,7 @@ impl Simulator {
                         rows = Rows::new(map, cur.h);
                         (row_u, row_v) = (rows.u, rows.v);
                     }
+                    lean[1] = pieces.promised();
                     // A0 carries over: it is continuous (a jump of Fext ends the run).
                     inp = Inputs {
                         ag: exc.ag,
@@ -388,6 +400,7 @@ impl Simulator {
             taken += 1;
         }
 
+        pieces.skip(lean[0]);
         *piece = cur;
         if taken > 0 {
             sums.add_work(&rows, mass, load_accel, &mut work);
