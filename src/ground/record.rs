@@ -137,6 +137,7 @@ pub fn advance_with_record<S: Stepper>(
         after_end: record.first_after(t_end).min(n),
         promise: extra.fext_rate == 0.0 && extra.fext.is_finite() && dt > 0.0 && dt.is_finite(),
         continue_stop: 0,
+        uniform_end: 0,
         steady: extra.ag_rate == 0.0 && extra.fext_rate == 0.0,
         yielded: false,
         done: false,
@@ -177,6 +178,10 @@ struct RecordPieces<'a> {
     /// the first (and `promise`), else 0: the whole intervals before it
     /// may be promised to continue the last one.
     continue_stop: usize,
+    /// The intervals that end at samples from the last one looked at up
+    /// to this one (excluded) are as long as the first up to rounding
+    /// (looked for once per stretch, [`RecordPieces::uniform_from`]).
+    uniform_end: usize,
     /// `extra` is constant (no rates).
     steady: bool,
     /// A piece was yielded (or the lean path will yield one next): the
@@ -197,6 +202,7 @@ impl RecordPieces<'_> {
         };
         // The lean path yields next (it does not mark its pieces).
         self.yielded |= i < self.stop;
+        self.uniform_end = 0;
     }
 
     /// The piece from `self.t` given its value, slope and end, and the
@@ -231,6 +237,34 @@ impl RecordPieces<'_> {
             rise / (t1 - t0)
         };
         (a0, slope, uniform)
+    }
+
+    /// The first sample from `k >= 1` on (`stop` at most) whose interval is
+    /// not as long as the first up to the rounding of the times.
+    fn uniform_from(&mut self, k: usize) -> usize {
+        if k < self.uniform_end {
+            return self.uniform_end;
+        }
+        let (time, dt, stop) = (self.time, self.dt, self.stop);
+        let uniform = |t0: f64, t1: f64| same_up_to_rounding(t1 - t0, dt, t1);
+        let mut j = k;
+        // Eight at a time, each eight checked whole (no branch per sample).
+        while j + 8 <= stop {
+            let (t0, t1) = (&time[j - 1..j + 7], &time[j..j + 8]);
+            if !t0
+                .iter()
+                .zip(t1)
+                .fold(true, |all, (&a, &b)| all & uniform(a, b))
+            {
+                break;
+            }
+            j += 8;
+        }
+        while j < stop && uniform(time[j - 1], time[j]) {
+            j += 1;
+        }
+        self.uniform_end = j;
+        j
     }
 
     /// A partial interval, one before the first or after the last sample,
@@ -275,7 +309,11 @@ impl PieceSource for RecordPieces<'_> {
             return self.partial();
         }
         let (a, slope, uniform) = self.whole(i);
-        self.continue_stop = if uniform & self.promise { self.stop } else { 0 };
+        self.continue_stop = if uniform & self.promise {
+            self.uniform_from(i + 1)
+        } else {
+            0
+        };
         let (t1, exc) = self.lean(i, a, slope);
         (self.t, self.next_sample) = (t1, i + 1);
         Some((t1, exc))
@@ -289,13 +327,11 @@ impl PieceSource for RecordPieces<'_> {
     #[inline(always)]
     fn continuing(&self, k: usize) -> Option<(f64, f64, f64)> {
         // A whole sample interval from its first sample, ending at or
-        // before `t_end` (the usual case); as long as the last, its slope
-        // by the product (the division only where `whole` needs it).
+        // before `t_end` (the usual case), as long as the last (looked
+        // for once, `uniform_from`): its slope by the product (the
+        // division only where `whole` needs it).
         let i = self.next_sample + k;
         let ([t0, t1], [a0, a1]) = (pair(self.time, i), pair(self.accel, i));
-        if !same_up_to_rounding(t1 - t0, self.dt, t1) {
-            return None;
-        }
         let exc = self.excitation(t0, a0, (a1 - a0) * self.inv_dt);
         // As `Excitation::check` (Fext is finite by the promise).
         if !(exc.ag + exc.ag_rate + t1).is_finite() {
