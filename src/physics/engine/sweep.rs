@@ -36,25 +36,27 @@ use crate::physics::params::MAX_BODIES;
 /// the run follow from these at its end.
 #[derive(Default)]
 struct WorkSums {
-    /// Packed as `ExactMap::quad`: 00, 11, 22, 33, 01, 02, 03, 12, 13, 23.
+    /// In pairs of two lanes: 00 11, 22 33, 02 13, 03 12, 01 23
+    /// ([`QUAD_ORDER`] maps `ExactMap::quad`'s packing to them).
     products: [f64; 10],
     linear: [f64; 4],
 }
 
+/// Where each product of `ExactMap::quad`'s packing (00, 11, 22, 33, 01,
+/// 02, 03, 12, 13, 23) is in [`WorkSums::products`].
+const QUAD_ORDER: [usize; 10] = [0, 1, 2, 3, 8, 4, 6, 7, 5, 9];
+
 impl WorkSums {
     #[inline(always)]
     fn add(&mut self, z: &[f64; 4]) {
-        let (s, [z0, z1, z2, z3]) = (&mut self.products, *z);
-        s[0] += z0 * z0;
-        s[1] += z1 * z1;
-        s[2] += z2 * z2;
-        s[3] += z3 * z3;
-        s[4] += z0 * z1;
-        s[5] += z0 * z2;
-        s[6] += z0 * z3;
-        s[7] += z1 * z2;
-        s[8] += z1 * z3;
-        s[9] += z2 * z3;
+        let [z0, z1, z2, z3] = *z;
+        // Two lanes at a time: [z0, z1] and [z2, z3] times themselves, each
+        // other, each other swapped; then [z0, z2] times [z1, z3].
+        let left = [z0, z1, z2, z3, z0, z1, z0, z1, z0, z2];
+        let right = [z0, z1, z2, z3, z2, z3, z3, z2, z1, z3];
+        for ((s, l), r) in self.products.iter_mut().zip(left).zip(right) {
+            *s += l * r;
+        }
         for (l, x) in self.linear.iter_mut().zip(z) {
             *l += x;
         }
@@ -78,7 +80,7 @@ impl WorkSums {
         let dot10 = |a: &[f64; 10]| -> f64 {
             let mut x = 0.0;
             for k in 0..10 {
-                x += a[k] * s[k];
+                x += a[k] * s[QUAD_ORDER[k]];
             }
             x
         };
