@@ -222,6 +222,7 @@ impl ExactMap {
 
     /// Bound on `|v^(m)|` over the substep from `z`, m = 1..=5.
     #[inline(always)]
+    #[cfg(test)]
     pub(super) fn sup_v(&self, m: usize, z: &[f64; 4]) -> f64 {
         self.sup_v_abs(m, &z.map(f64::abs))
     }
