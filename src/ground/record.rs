@@ -174,9 +174,10 @@ struct RecordPieces<'a> {
     /// first interval positive and finite: a whole interval as long as it
     /// may be promised to continue the last one.
     promise: bool,
-    /// `stop` while the piece yielded last was a whole interval as long as
-    /// the first (and `promise`), else 0: the whole intervals before it
-    /// may be promised to continue the last one.
+    /// While the piece yielded last was a whole interval as long as the
+    /// first (and `promise`), the end of the whole intervals as long as the
+    /// first that follow it ([`RecordPieces::uniform_from`]); else 0. The
+    /// intervals before it may be promised to continue the last one.
     continue_stop: usize,
     /// The intervals that end at samples from the last one looked at up
     /// to this one (excluded) are as long as the first up to rounding
