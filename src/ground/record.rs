@@ -335,7 +335,7 @@ impl PieceSource for RecordPieces<'_> {
         let ([t0, t1], [a0, a1]) = (pair(self.time, i), pair(self.accel, i));
         let exc = self.excitation(t0, a0, (a1 - a0) * self.inv_dt);
         // As `Excitation::check` (Fext is finite by the promise).
-        if !Excitation::finite_sum(exc.ag + exc.ag_rate + t1) {
+        if !(exc.ag + exc.ag_rate + t1).is_finite() {
             return None;
         }
         Some((t1, exc.ag, exc.ag_rate))

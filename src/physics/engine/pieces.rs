@@ -28,19 +28,13 @@ impl Excitation {
     /// every value finite and time not going back.
     #[inline]
     pub fn check(&self, now: f64, t_end: f64) -> Result<(), SimError> {
+        // A finite sum means every value is finite. A sum that is not (a
+        // bad value, or finite ones overflowing) goes to the detailed check.
         let sum = self.ag + self.ag_rate + self.fext + self.fext_rate + t_end;
-        if Self::finite_sum(sum) && t_end >= now {
+        if sum.is_finite() && t_end >= now {
             return Ok(());
         }
         self.check_each(now, t_end)
-    }
-
-    /// Whether a sum of values is finite: then every value is. A sum that
-    /// is not (a bad value, or finite ones overflowing) goes to the
-    /// detailed check. (`x - x` is 0 exactly when `x` is finite.)
-    #[inline(always)]
-    pub(crate) fn finite_sum(sum: f64) -> bool {
-        sum - sum == 0.0
     }
 
     #[cold]
