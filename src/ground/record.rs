@@ -136,7 +136,9 @@ pub fn advance_with_record<S: Stepper>(
         stop: 0,
         after_end: record.first_after(t_end).min(n),
         promise: extra.fext_rate == 0.0 && extra.fext.is_finite() && dt > 0.0 && dt.is_finite(),
-        last_whole: false,
+        continue_stop: 0,
+        uniform_end: 0,
+        steady: extra.ag_rate == 0.0 && extra.fext_rate == 0.0,
         yielded: false,
         done: false,
     };
@@ -172,9 +174,17 @@ struct RecordPieces<'a> {
     /// first interval positive and finite: a whole interval as long as it
     /// may be promised to continue the last one.
     promise: bool,
-    /// The piece yielded last was a whole interval as long as the first
-    /// (and `promise`).
-    last_whole: bool,
+    /// While the piece yielded last was a whole interval as long as the
+    /// first (and `promise`), the end of the whole intervals as long as the
+    /// first that follow it ([`RecordPieces::uniform_from`]); else 0. The
+    /// intervals before it may be promised to continue the last one.
+    continue_stop: usize,
+    /// The intervals that end at samples from the last one looked at up
+    /// to this one (excluded) are as long as the first up to rounding
+    /// (looked for once per stretch, [`RecordPieces::uniform_from`]).
+    uniform_end: usize,
+    /// `extra` is constant (no rates).
+    steady: bool,
     /// A piece was yielded (or the lean path will yield one next): the
     /// pieces end once `t` reaches `t_end`.
     yielded: bool,
@@ -193,6 +203,7 @@ impl RecordPieces<'_> {
         };
         // The lean path yields next (it does not mark its pieces).
         self.yielded |= i < self.stop;
+        self.uniform_end = 0;
     }
 
     /// The piece from `self.t` given its value, slope and end, and the
@@ -204,7 +215,7 @@ impl RecordPieces<'_> {
         } else {
             self.t_end
         };
-        let exc = self.excitation(a, slope);
+        let exc = self.excitation(self.t, a, slope);
         self.t = t1;
         self.done = t1 >= self.t_end;
         if piece_end <= t1 {
@@ -229,6 +240,34 @@ impl RecordPieces<'_> {
         (a0, slope, uniform)
     }
 
+    /// The first sample from `k >= 1` on (`stop` at most) whose interval is
+    /// not as long as the first up to the rounding of the times.
+    fn uniform_from(&mut self, k: usize) -> usize {
+        if k < self.uniform_end {
+            return self.uniform_end;
+        }
+        let (time, dt, stop) = (self.time, self.dt, self.stop);
+        let uniform = |t0: f64, t1: f64| same_up_to_rounding(t1 - t0, dt, t1);
+        let mut j = k;
+        // Eight at a time, each eight checked whole (no branch per sample).
+        while j + 8 <= stop {
+            let (t0, t1) = (&time[j - 1..j + 7], &time[j..j + 8]);
+            if !t0
+                .iter()
+                .zip(t1)
+                .fold(true, |all, (&a, &b)| all & uniform(a, b))
+            {
+                break;
+            }
+            j += 8;
+        }
+        while j < stop && uniform(time[j - 1], time[j]) {
+            j += 1;
+        }
+        self.uniform_end = j;
+        j
+    }
+
     /// A partial interval, one before the first or after the last sample,
     /// or a whole one that `t_end` cuts.
     #[cold]
@@ -249,7 +288,7 @@ impl RecordPieces<'_> {
             }
             piece
         };
-        self.last_whole = false;
+        self.continue_stop = 0;
         self.yielded = true;
         self.align();
         Some((t1, exc))
@@ -271,28 +310,43 @@ impl PieceSource for RecordPieces<'_> {
             return self.partial();
         }
         let (a, slope, uniform) = self.whole(i);
-        self.last_whole = uniform & self.promise;
+        self.continue_stop = if uniform & self.promise {
+            self.uniform_from(i + 1)
+        } else {
+            0
+        };
         let (t1, exc) = self.lean(i, a, slope);
         (self.t, self.next_sample) = (t1, i + 1);
         Some((t1, exc))
     }
 
     #[inline(always)]
-    fn next_continuing(&mut self) -> Option<(f64, Excitation)> {
-        let i = self.next_sample;
-        if i >= self.stop || !self.last_whole {
-            return None;
-        }
+    fn promised(&self) -> usize {
+        self.continue_stop.saturating_sub(self.next_sample)
+    }
+
+    #[inline(always)]
+    fn continuing(&self, k: usize) -> Option<(f64, f64, f64)> {
         // A whole sample interval from its first sample, ending at or
-        // before `t_end`, as long as the last (the usual case).
-        let (a, slope, uniform) = self.whole(i);
-        let (t1, exc) = self.lean(i, a, slope);
+        // before `t_end` (the usual case), as long as the last (looked
+        // for once, `uniform_from`): its slope by the product (the
+        // division only where `whole` needs it).
+        let i = self.next_sample + k;
+        let ([t0, t1], [a0, a1]) = (pair(self.time, i), pair(self.accel, i));
+        let exc = self.excitation(t0, a0, (a1 - a0) * self.inv_dt);
         // As `Excitation::check` (Fext is finite by the promise).
-        if !(uniform && (exc.ag + exc.ag_rate + t1).is_finite()) {
+        if !(exc.ag + exc.ag_rate + t1).is_finite() {
             return None;
         }
-        (self.t, self.next_sample) = (t1, i + 1);
-        Some((t1, exc))
+        Some((t1, exc.ag, exc.ag_rate))
+    }
+
+    #[inline(always)]
+    fn skip(&mut self, k: usize) {
+        if k > 0 {
+            self.next_sample += k;
+            self.t = self.time[self.next_sample - 1];
+        }
     }
 }
 
@@ -301,14 +355,23 @@ impl RecordPieces<'_> {
     /// its start): `piece` without its cuts, and without moving on.
     #[inline(always)]
     fn lean(&self, i: usize, a: f64, slope: f64) -> (f64, Excitation) {
-        (pair(self.time, i)[1], self.excitation(a, slope))
+        (pair(self.time, i)[1], self.excitation(self.t, a, slope))
     }
 
-    /// `scale * record + extra` from `self.t`, where the record is `a`
-    /// with slope `slope`.
+    /// `scale * record + extra` from `t`, where the record is `a` with
+    /// slope `slope`.
     #[inline(always)]
-    fn excitation(&self, a: f64, slope: f64) -> Excitation {
-        let (e, dt) = (&self.extra, self.t - self.t_start);
+    fn excitation(&self, t: f64, a: f64, slope: f64) -> Excitation {
+        let (e, dt) = (&self.extra, t - self.t_start);
+        if self.steady {
+            // `extra` constant: its rates' terms are zeros.
+            return Excitation {
+                ag: self.scale * a + e.ag,
+                ag_rate: self.scale * slope,
+                fext: e.fext,
+                fext_rate: 0.0,
+            };
+        }
         Excitation {
             ag: self.scale * a + e.ag + e.ag_rate * dt,
             ag_rate: self.scale * slope + e.ag_rate,

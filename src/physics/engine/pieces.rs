@@ -64,16 +64,31 @@ pub trait PieceSource {
     /// The next piece, or `None` at the end.
     fn next_piece(&mut self) -> Option<(f64, Excitation)>;
 
-    /// The next piece only where the source promises that it continues its
-    /// previous one as a record's next sample does (as long as it up to the
-    /// rounding of the times, 1e-15 relative, `Fext` constant, every value
-    /// finite): the driver then keeps its substeps without checking it
-    /// again. `None` takes nothing (the driver asks `next_piece`). A lean
-    /// method of its own, so that the common piece is built in registers.
+    /// How many of the next pieces the source may promise to continue the
+    /// one it gave last, as a record's next samples do (each as long as
+    /// the last up to the rounding of the times, 1e-15 relative, `Fext`
+    /// constant): the driver takes them with [`PieceSource::continuing`],
+    /// keeping its substeps without checking them again, and then moves
+    /// past them with [`PieceSource::skip`]. Lean methods of their own,
+    /// so that the common piece is built in registers, its place counted
+    /// by the driver.
     #[inline(always)]
-    fn next_continuing(&mut self) -> Option<(f64, Excitation)> {
+    fn promised(&self) -> usize {
+        0
+    }
+
+    /// Promised piece `k` (`k < promised()`), without moving on: its end,
+    /// `ag` and `ag_rate` (`Fext` and its zero rate stay as they were), if
+    /// it keeps the promise (every value finite too); `None` takes nothing
+    /// (the driver skips the pieces taken and asks `next_piece`).
+    #[inline(always)]
+    fn continuing(&self, _k: usize) -> Option<(f64, f64, f64)> {
         None
     }
+
+    /// Moves past the first `k` promised pieces (the driver took them).
+    #[inline(always)]
+    fn skip(&mut self, _k: usize) {}
 }
 
 /// An iterator of pieces as a [`PieceSource`] that promises nothing.

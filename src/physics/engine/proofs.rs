@@ -38,27 +38,22 @@ pub(super) fn raise_peak_proved(
     if ends + 4.0 / 27.0 * h * (d0.abs() + d1.abs()) + rest <= *peak {
         return true;
     }
-    peak_near(peak, [y0, d0, y1, d1], h, rest, ends, third)
-}
-
-#[inline(never)]
-fn peak_near(
-    peak: &mut f64,
-    [y0, d0, y1, d1]: [f64; 4],
-    h: f64,
-    rest: f64,
-    ends: f64,
-    third: impl FnOnce() -> f64,
-) -> bool {
     // Monotone: y' stays within h²/8 sup|y'''| of its linear interpolation,
-    // so it keeps its sign when both ends exceed that.
-    if d0 * d1 > 0.0 && d0.abs().min(d1.abs()) > 0.125 * h * h * third() {
+    // so it keeps its sign when both ends exceed that (a peak rising with
+    // the motion, the usual case here).
+    if d0 * d1 > 0.0 && d0.abs().min(d1.abs()) > 0.125 * h2 * third() {
         if ends > *peak {
             *peak = ends;
         }
         return true;
     }
-    hermite::max_abs(y0, d0, y1, d1, h) + rest <= *peak
+    cubic_below(*peak, [y0, d0, y1, d1], h, rest)
+}
+
+/// Whether the cubic through the ends plus `rest` stays at or below `peak`.
+#[inline(never)]
+fn cubic_below(peak: f64, [y0, d0, y1, d1]: [f64; 4], h: f64, rest: f64) -> bool {
+    hermite::max_abs(y0, d0, y1, d1, h) + rest <= peak
 }
 
 /// Whether the absolute acceleration stays inside the stick band `[lo, hi]`
@@ -101,8 +96,9 @@ pub(super) fn slip_guard_proved(
 }
 
 /// Raises the structure's peaks of |u0| and |A0| over the substep from `z`
-/// (end values `u1`, `v1`; the absolute acceleration `a0` and `a1` at the
-/// ends, its rates `jerks()`) where that is proved; returns which were.
+/// (with `|z|`; end values `u1`, `v1`; the absolute acceleration `a0` and
+/// `a1` at the ends, its rates `jerks()`) where that is proved; returns
+/// which were.
 /// Quick tests first: the larger end plus `h²/8 sup|y''|` (`sup|u''| =
 /// sup|v'|`, `sup|A''| = sup|v'''| <= s3`); then the cubic bounds with the
 /// rates.
@@ -110,7 +106,7 @@ pub(super) fn slip_guard_proved(
 #[inline(always)]
 pub(super) fn structure_peaks_proved(
     map: &ExactMap,
-    z: &[f64; 4],
+    [z, z_abs]: [&[f64; 4]; 2],
     [u1, v1]: [f64; 2],
     [a0, a1]: [f64; 2],
     jerks: impl FnOnce() -> [f64; 2],
@@ -119,16 +115,28 @@ pub(super) fn structure_peaks_proved(
     [peak_u0, peak_a0]: [&mut f64; 2],
 ) -> [bool; 2] {
     let sag = 0.125 * h * h * s3;
-    let (e0, e1) = (z[0].abs(), u1.abs());
-    let ends = if e0 > e1 { e0 } else { e1 };
-    let u_proved = ends + sag * map.one_over_three <= *peak_u0
-        || raise_peak_proved(peak_u0, [z[0], z[1], u1, v1], h, s3, || map.sup_v(2, z));
+    let (e0, e1) = (z_abs[0], u1.abs());
+    let ends_u = if e0 > e1 { e0 } else { e1 };
     let (e0, e1) = (a0.abs(), a1.abs());
-    let ends = if e0 > e1 { e0 } else { e1 };
-    let a_proved = ends + sag <= *peak_a0 || {
+    let ends_a = if e0 > e1 { e0 } else { e1 };
+    let quick = [
+        ends_u + sag * map.one_over_three <= *peak_u0,
+        ends_a + sag <= *peak_a0,
+    ];
+    // Both at once (one branch on the usual path).
+    if quick[0] & quick[1] {
+        return quick;
+    }
+    let u_proved = quick[0]
+        || raise_peak_proved(peak_u0, [z[0], z[1], u1, v1], h, s3, || {
+            map.sup_v_abs(2, z_abs)
+        });
+    let a_proved = quick[1] || {
         let [j0, j1] = jerks();
         let fifth = map.five_over_three * s3;
-        raise_peak_proved(peak_a0, [a0, j0, a1, j1], h, fifth, || map.sup_v(4, z))
+        raise_peak_proved(peak_a0, [a0, j0, a1, j1], h, fifth, || {
+            map.sup_v_abs(4, z_abs)
+        })
     };
     [u_proved, a_proved]
 }

@@ -36,25 +36,27 @@ use crate::physics::params::MAX_BODIES;
 /// the run follow from these at its end.
 #[derive(Default)]
 struct WorkSums {
-    /// Packed as `ExactMap::quad`: 00, 11, 22, 33, 01, 02, 03, 12, 13, 23.
+    /// In pairs of two lanes: 00 11, 22 33, 02 13, 03 12, 01 23
+    /// ([`QUAD_ORDER`] maps `ExactMap::quad`'s packing to them).
     products: [f64; 10],
     linear: [f64; 4],
 }
 
+/// Where each product of `ExactMap::quad`'s packing (00, 11, 22, 33, 01,
+/// 02, 03, 12, 13, 23) is in [`WorkSums::products`].
+const QUAD_ORDER: [usize; 10] = [0, 1, 2, 3, 8, 4, 6, 7, 5, 9];
+
 impl WorkSums {
     #[inline(always)]
     fn add(&mut self, z: &[f64; 4]) {
-        let (s, [z0, z1, z2, z3]) = (&mut self.products, *z);
-        s[0] += z0 * z0;
-        s[1] += z1 * z1;
-        s[2] += z2 * z2;
-        s[3] += z3 * z3;
-        s[4] += z0 * z1;
-        s[5] += z0 * z2;
-        s[6] += z0 * z3;
-        s[7] += z1 * z2;
-        s[8] += z1 * z3;
-        s[9] += z2 * z3;
+        let [z0, z1, z2, z3] = *z;
+        // Two lanes at a time: [z0, z1] and [z2, z3] times themselves, each
+        // other, each other swapped; then [z0, z2] times [z1, z3].
+        let left = [z0, z1, z2, z3, z0, z1, z0, z1, z0, z2];
+        let right = [z0, z1, z2, z3, z2, z3, z3, z2, z1, z3];
+        for ((s, l), r) in self.products.iter_mut().zip(left).zip(right) {
+            *s += l * r;
+        }
         for (l, x) in self.linear.iter_mut().zip(z) {
             *l += x;
         }
@@ -78,7 +80,7 @@ impl WorkSums {
         let dot10 = |a: &[f64; 10]| -> f64 {
             let mut x = 0.0;
             for k in 0..10 {
-                x += a[k] * s[k];
+                x += a[k] * s[QUAD_ORDER[k]];
             }
             x
         };
@@ -220,62 +222,66 @@ impl Simulator {
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
         let mut taken = 0u64;
         let mut pending = None;
+        // The pieces the source promised to continue the last: `lean[0]`
+        // of `lean[1]` taken (the source is told at the end).
+        let mut lean = [0, pieces.promised()];
 
         'steps: loop {
             if cur.i > cur.n {
-                if let Some((t_end, exc)) = pieces.next_continuing() {
+                let next = if lean[0] < lean[1] {
+                    pieces.continuing(lean[0])
+                } else {
+                    None
+                };
+                if let Some((t_end, ag, ag_rate)) = next {
+                    lean[0] += 1;
                     // The source's promise: a record's next sample, as long
-                    // as the last, Fext constant, every value finite.
-                    let Excitation {
-                        ag,
-                        ag_rate,
-                        fext,
-                        fext_rate,
-                    } = exc;
+                    // as the last, Fext constant (as it is), every value
+                    // finite. Its first substep follows at once (the last
+                    // piece had one at least).
+                    debug_assert!(cur.n >= 1);
                     (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
                     (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
-                    (cur.exc.fext, cur.exc.fext_rate) = (fext, fext_rate);
+                    (inp.ag, inp.ag_rate) = (ag, ag_rate);
+                } else {
+                    pieces.skip(lean[0]);
+                    lean = [0, 0];
+                    let Some((t_end, exc)) = pieces.next_piece() else {
+                        break;
+                    };
+                    // A jump of Fext, or a bad value: the piece is begun anew;
+                    // on a prescribed support a jump of ag too, or any Fext.
+                    let on_support =
+                        prescribed && (is_jump(exc.ag, inp.ag) || exc.fext_rate != 0.0);
+                    if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() || on_support {
+                        pending = Some((t_end, exc));
+                        break;
+                    }
+                    if cur.same_length(t0, t_end) {
+                        // A record's next sample: the same substeps, map and rows.
+                        (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
+                    } else {
+                        cur = Piece::new(t0, t_end, &exc, h_max);
+                        sums.flush(&rows, mass, load_accel, &mut work);
+                        let hc = canonical_length(cur.h);
+                        if hc != map.h {
+                            let i = maps.index(sys, mass, hc);
+                            map = maps.get(i);
+                            (w2, cm) = (map.w2, map.cm);
+                        }
+                        rows = Rows::new(map, cur.h);
+                        (row_u, row_v) = (rows.u, rows.v);
+                    }
+                    lean[1] = pieces.promised();
+                    // A0 carries over: it is continuous (a jump of Fext ends the run).
                     inp = Inputs {
-                        ag,
-                        fext,
-                        ag_rate,
-                        fext_rate,
+                        ag: exc.ag,
+                        fext: exc.fext,
+                        ag_rate: exc.ag_rate,
+                        fext_rate: exc.fext_rate,
                     };
                     continue;
                 }
-                let Some((t_end, exc)) = pieces.next_piece() else {
-                    break;
-                };
-                // A jump of Fext, or a bad value: the piece is begun anew;
-                // on a prescribed support a jump of ag too, or any Fext.
-                let on_support = prescribed && (is_jump(exc.ag, inp.ag) || exc.fext_rate != 0.0);
-                if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() || on_support {
-                    pending = Some((t_end, exc));
-                    break;
-                }
-                if cur.same_length(t0, t_end) {
-                    // A record's next sample: the same substeps, map and rows.
-                    (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
-                } else {
-                    cur = Piece::new(t0, t_end, &exc, h_max);
-                    sums.flush(&rows, mass, load_accel, &mut work);
-                    let hc = canonical_length(cur.h);
-                    if hc != map.h {
-                        let i = maps.index(sys, mass, hc);
-                        map = maps.get(i);
-                        (w2, cm) = (map.w2, map.cm);
-                    }
-                    rows = Rows::new(map, cur.h);
-                    (row_u, row_v) = (rows.u, rows.v);
-                }
-                // A0 carries over: it is continuous (a jump of Fext ends the run).
-                inp = Inputs {
-                    ag: exc.ag,
-                    fext: exc.fext,
-                    ag_rate: exc.ag_rate,
-                    fext_rate: exc.fext_rate,
-                };
-                continue;
             }
             // Every substep of a piece is `cur.h` long; the last ends at the
             // piece's end, which differs from `t0 + h` only by the rounding
@@ -292,7 +298,8 @@ impl Simulator {
             let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
             let (ag1, fext1) = (inp.ag + inp.ag_rate * hs, inp.fext + inp.fext_rate * hs);
             let a1 = load_accel + rule.accel(ag1, fext1) - w2 * u1 - cm * v1;
-            let s3 = map.sup_v(3, &z);
+            let z_abs = z.map(f64::abs);
+            let s3 = map.sup_v_abs(3, &z_abs);
             // Stuck interfaces: the absolute acceleration stays in the band.
             // Its rate: A' = Fext'/m - w2 v - cm (A - ag).
             let ends = [a_abs, a1];
@@ -315,7 +322,11 @@ impl Simulator {
                 du[c] = hs * vel[c] + 0.5 * hs * hs * accel_c[c] - g2;
                 v_end[c] = vel[c] + hs * accel_c[c] - g1;
             }
-            let s2 = if NC > 1 { map.sup_v(2, &z) } else { 0.0 };
+            let s2 = if NC > 1 {
+                map.sup_v_abs(2, &z_abs)
+            } else {
+                0.0
+            };
             for m in 0..NC - 1 {
                 let sign = slip_sign[m];
                 if sign == 0.0 {
@@ -341,7 +352,7 @@ impl Simulator {
             // one inside, on the polynomials.
             let peaks = [&mut peak_u0, &mut peak_a0];
             let [u_proved, a_proved] =
-                structure_peaks_proved(map, &z, [u1, v1], ends, jerks, hs, s3, peaks);
+                structure_peaks_proved(map, [&z, &z_abs], [u1, v1], ends, jerks, hs, s3, peaks);
             if !(u_proved && a_proved) {
                 let peaks = [
                     (!u_proved).then_some(&mut peak_u0),
@@ -391,6 +402,7 @@ impl Simulator {
             taken += 1;
         }
 
+        pieces.skip(lean[0]);
         *piece = cur;
         if taken > 0 {
             sums.add_work(&rows, mass, load_accel, &mut work);
