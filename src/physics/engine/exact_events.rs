@@ -187,14 +187,15 @@ impl Flow {
                 let upper_rate = |c: usize| (d.accel_const[c] - self.ag0) * self.h;
                 let upper_spread =
                     |c: usize| upper_rate(c).abs() + 0.5 * (self.ag_rate * self.h * self.h).abs();
-                let (g0, spread) = if lo == 0 {
+                if lo == 0 {
                     let g0 = sign * (sim.v[d.bottom[hi]] - self.v.c[0]);
-                    (g0, upper_spread(hi) + self.v_spread)
-                } else {
-                    let g0 = sign * (sim.v[d.bottom[hi]] - sim.v[d.bottom[lo]]);
-                    (g0, (upper_rate(hi) - upper_rate(lo)).abs())
-                };
-                g0 > spread
+                    return g0 > upper_spread(hi) + self.v_spread;
+                }
+                // Linear: positive at both ends, or starting at zero and
+                // growing (a slip just started), as `first_zero` finds it.
+                let g0 = sign * (sim.v[d.bottom[hi]] - sim.v[d.bottom[lo]]);
+                let rate = sign * (upper_rate(hi) - upper_rate(lo));
+                (g0 > 0.0 || (g0 == 0.0 && rate > 0.0)) && g0 + rate > 0.0
             }
             Guard::Stuck {
                 mass_above,
