@@ -17,17 +17,17 @@
 //! guard positive over it, and a sign change is refined by Newton's method
 //! only on a stretch where `g' < 0` is proved (a single crossing); anything
 //! else is halved. The motion is then taken to that instant with exact
-//! energies (the input work from `∫u`, an integral of the polynomial, the
-//! viscous work from the cluster's energy balance) and exact running peaks
-//! (at the sign changes of the derivative, found the same way); the guard
-//! fires, the mode is resolved, and the rest of the substep continues in
-//! the new mode. The chatter guards of `Simulator::step_located` are kept:
-//! a guard violated from the start fires at once (a zero-length event), and
-//! every guard is muted after `MAX_EVENTS_PER_STEP` events; an interface
-//! that fires at once twice in the substep, or a search that cannot decide
-//! within its budget, hands the rest of the substep to fine stretches of
-//! the same exact motion (`ω h <= 0.01`), where the contact is muted for
-//! one stretch only and an undecided search halves the stretch.
+//! energies (the input work from `∫u`, the viscous work from `∫v²`, both
+//! integrals of the polynomials) and exact running peaks (at the sign changes
+//! of the derivative, found the same way); the guard fires, the mode is
+//! resolved, and the rest of the substep continues in the new mode. The
+//! chatter guards of `Simulator::step_located` are kept: a guard violated
+//! from the start fires at once (a zero-length event), and every guard is
+//! muted after `MAX_EVENTS_PER_STEP` events; an interface that fires at once
+//! twice in the substep, or a search that cannot decide within its budget,
+//! hands the rest of the substep to fine stretches of the same exact motion
+//! (`ω h <= 0.01`), where the contact is muted for one stretch only and an
+//! undecided search halves the stretch.
 
 use super::poly::*;
 use super::*;
@@ -558,22 +558,11 @@ impl Simulator {
         }
 
         // Work: input `∫ (Fext - m ag) v = m (q0 Δu + p' (τ u(τ) - ∫u))`,
-        // friction the constant force times the slip, viscous `c ∫ v²` from
-        // the cluster's equation of motion times `v`: `c ∫ v² = m ∫ p v -
-        // Δ(k u² / 2) - Δ(m v² / 2)`, `p = p0 + p' τ` its whole forcing
-        // (exact on the polynomials to their 1e-20; no quadrature of `v²`).
+        // viscous `c ∫ v²`, friction the constant force times the slip.
         let int_u = flow.h * integral(&flow.u, s);
         let mass = d.mass[0];
-        let (du0, moment) = (u0 - u0_start, tau * u0 - int_u);
-        let input = mass * (flow.q0 * du0 + flow.p1 * moment);
-        let viscous = if self.sys.c == 0.0 {
-            0.0
-        } else {
-            let forced = (d.load_accel0 + flow.q0) * du0 + flow.p1 * moment;
-            let (u_sum, v0_start) = (u0 + u0_start, self.v[0]);
-            let stored = 0.5 * (flow.w2 * u_sum * du0 + (v0 + v0_start) * (v0 - v0_start));
-            mass * (forced - stored)
-        };
+        let input = mass * (flow.q0 * (u0 - u0_start) + flow.p1 * (tau * u0 - int_u));
+        let viscous = self.sys.c * flow.h * integral_of_square(&flow.v, s);
         for m in &d.moving[..d.n_moving] {
             self.e_friction[m.j] -= d.slip_force[m.j] * (du[m.hi] - du[m.lo]);
         }
@@ -581,7 +570,7 @@ impl Simulator {
         self.e_input += input + upper_work;
         // A prescribed support's drift from the input frame: its work on
         // the stack beyond the input (Dynamics::support_force).
-        let support_work = d.support_force * du0;
+        let support_work = d.support_force * (u0 - u0_start);
         if support_work != 0.0 {
             self.e_input += support_work;
         }

@@ -1,8 +1,8 @@
 //! Polynomials of the exact motion over a stretch, `Σ c[k] s^k` on
 //! `s ∈ [0, 1]`: evaluation, bounds of their derivatives, the first zero of
 //! a guard with a proof that none comes before it ([`first_zero`]), the
-//! largest `|y|` over a stretch ([`raise_peak_exact`]), and the integral
-//! the input work needs. Used by the event path (`exact_events.rs`) and, for
+//! largest `|y|` over a stretch ([`raise_peak_exact`]), and the integrals
+//! the work terms need. Used by the event path (`exact_events.rs`) and, for
 //! peaks, by the one driver (`sweep.rs`).
 
 use super::proofs::stays_positive;
@@ -310,6 +310,56 @@ pub(super) fn integral(p: &Poly, s: f64) -> f64 {
     // (Half-open: an inclusive range's iterator tests a flag per step.)
     for k in (0..p.deg + 1).rev() {
         total = total * s + p.c[k] * INV[k];
+    }
+    total * s
+}
+
+/// Gauss–Legendre nodes and weights on [0, 1], 12 points: exact for
+/// polynomials of degree 23.
+const GAUSS_NODES: [f64; 12] = [
+    0.009219682876640378,
+    0.0479413718147626,
+    0.11504866290284765,
+    0.20634102285669126,
+    0.31608425050090994,
+    0.43738329574426554,
+    0.5626167042557344,
+    0.6839157494990901,
+    0.7936589771433087,
+    0.8849513370971523,
+    0.9520586281852375,
+    0.9907803171233596,
+];
+const GAUSS_WEIGHTS: [f64; 12] = [
+    0.023587668193255706,
+    0.05346966299765953,
+    0.08003916427167321,
+    0.10158371336153287,
+    0.1167462682691773,
+    0.12457352290670134,
+    0.12457352290670134,
+    0.1167462682691773,
+    0.10158371336153287,
+    0.08003916427167321,
+    0.05346966299765953,
+    0.023587668193255706,
+];
+
+/// `∫_0^s p(σ)² dσ` for a Taylor polynomial of the motion, by the 12-point
+/// Gauss rule (the evaluations run side by side): exact for the square's
+/// terms up to degree 23; those above fall as `(2ρ)^k / k!` with
+/// `ρ <= 0.5 (1 + 2ζ)` (`exact_map::MAP_H_OMEGA`), below 1e-22 of the first.
+pub(super) fn integral_of_square(p: &Poly, s: f64) -> f64 {
+    let x = GAUSS_NODES.map(|x| x * s);
+    let mut y = [0.0; 12];
+    for &c in p.coefs().iter().rev() {
+        for i in 0..12 {
+            y[i] = y[i] * x[i] + c;
+        }
+    }
+    let mut total = 0.0;
+    for i in 0..12 {
+        total += GAUSS_WEIGHTS[i] * y[i] * y[i];
     }
     total * s
 }
