@@ -366,16 +366,15 @@ impl Simulator {
                 du[c] = hs * vel[c] + half_h2a[c] - g2;
                 v_end[c] = vel[c] + ha[c] - g1;
             }
-            let s2 = if NC > 1 {
-                map.sup_v_abs(2, &z_abs)
-            } else {
-                0.0
-            };
             if NC > 1 && sign0 != 0.0 {
-                // The structure's slip guard; |g''| <= sup|v0''| + |ag'|.
+                // The structure's slip guard; |g''| <= sup|v0''| + |ag'|, at
+                // most `two_over_three` sup|v0'''| + |ag'|.
                 let (g0, g1) = (sign0 * (vel[1] - vel[0]), sign0 * (v_end[1] - v1));
                 let rates = || [sign0 * (accel_c[1] - a_abs), sign0 * (accel_c[1] - a1)];
-                if !slip_guard_proved([g0, g1], rates, hs, s2 + inp.ag_rate.abs()) {
+                let ag_rate = inp.ag_rate.abs();
+                let coarse = map.two_over_three * s3 + ag_rate;
+                let bound = || map.sup_v_abs(2, &z_abs) + ag_rate;
+                if !slip_guard_proved([g0, g1], rates, hs, coarse, bound) {
                     break;
                 }
             }
@@ -402,7 +401,7 @@ impl Simulator {
                 new_slip[m] = slip[m] + (du[m + 1] - du[m]);
             }
             if NC > 1 && sign0 == 0.0 {
-                let third = s2 + inp.ag_rate.abs();
+                let third = map.sup_v_abs(2, &z_abs) + inp.ag_rate.abs();
                 let ends = [slip[0], vel[1] - vel[0], new_slip[0], v_end[1] - v1];
                 if !raise_peak_proved(&mut peak_slip0, ends, hs, s3, || third) {
                     break;
