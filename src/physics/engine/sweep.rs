@@ -63,33 +63,30 @@ impl WorkSums {
     }
 
     /// Adds the sums' work to `[input, viscous]` and starts anew, with the
-    /// coefficients of `map`'s rows for substeps of length `h` ([`Rows`]):
-    /// per unit mass the input work is `P·S - L (W·Σz)`, the viscous
-    /// `c (V·S)`.
+    /// coefficients of `rows` (the map's exact work forms and the first
+    /// order in the rest of its length, [`Rows::new`]): per unit mass the
+    /// input work is `P·S - L (W·Σz)`, the viscous `c (V·S)`.
     #[inline(never)]
-    fn flush(&mut self, map: &ExactMap, h: f64, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
-        self.add_work(map, h, mass, load_accel, work);
+    fn flush(&mut self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
+        self.add_work(rows, mass, load_accel, work);
         *self = WorkSums::default();
     }
 
     /// The sums' work added to `[input, viscous]` (as [`WorkSums::flush`],
     /// the sums left as they are: a run's last use).
     #[inline(never)]
-    fn add_work(&self, map: &ExactMap, h: f64, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
+    fn add_work(&self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
         let (s, l) = (&self.products, &self.linear);
-        // The map's rows plus the rest of the length times their rates.
-        let (r, d, delta) = (&map.rows, &map.rows_rate, h - map.h);
-        let dot10 = |a: &[f64; 10], b: &[f64; 10]| -> f64 {
+        let dot10 = |a: &[f64; 10]| -> f64 {
             let mut x = 0.0;
             for k in 0..10 {
-                x += (a[k] + delta * b[k]) * s[QUAD_ORDER[k]];
+                x += a[k] * s[QUAD_ORDER[k]];
             }
             x
         };
-        let work_l: [f64; 4] = std::array::from_fn(|k| r.work_l[k] + delta * d.work_l[k]);
-        let with_load = dot(&work_l, l);
-        work[0] += mass * (dot10(&r.work_p, &d.work_p) - load_accel * with_load);
-        work[1] += r.c * dot10(&r.work_v, &d.work_v);
+        let with_load = dot(&rows.work_l, l);
+        work[0] += mass * (dot10(&rows.work_p) - load_accel * with_load);
+        work[1] += rows.c * dot10(&rows.work_v);
     }
 }
 
@@ -202,7 +199,8 @@ impl Simulator {
         let mut cur = *piece;
         let first = maps.index(sys, mass, canonical_length(cur.h));
         let mut map = maps.get(first);
-        let [mut row_u, mut row_v] = Rows::motion(map, cur.h);
+        let mut rows = Rows::new(map, cur.h);
+        let [mut row_u, mut row_v] = [rows.u, rows.v];
         // The upper clusters' terms in `A_c` over a substep of `h`.
         let terms = |h: f64| -> [[f64; NC]; 2] {
             [
@@ -301,7 +299,7 @@ impl Simulator {
                         // A record's next sample: the same substeps, map and rows.
                         (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
                     } else {
-                        sums.flush(map, cur.h, mass, load_accel, &mut work);
+                        sums.flush(&rows, mass, load_accel, &mut work);
                         cur = Piece::new(t0, t_end, &exc, h_max);
                         let hc = canonical_length(cur.h);
                         if hc != map.h {
@@ -309,7 +307,8 @@ impl Simulator {
                             map = maps.get(i);
                             (w2, cm) = (map.w2, map.cm);
                         }
-                        [row_u, row_v] = Rows::motion(map, cur.h);
+                        rows = Rows::new(map, cur.h);
+                        [row_u, row_v] = [rows.u, rows.v];
                         [half_h2a, ha] = terms(cur.h);
                     }
                     lean[1] = pieces.promised();
@@ -423,7 +422,7 @@ impl Simulator {
         pieces.skip(lean[0]);
         *piece = cur;
         if taken > 0 {
-            sums.add_work(map, cur.h, mass, load_accel, &mut work);
+            sums.add_work(&rows, mass, load_accel, &mut work);
             // Input work on the upper clusters over the run, exact: with
             // v_c' = A_c - ag, -m ag v_c = d(m v_c²/2)/dt - m A_c v_c.
             let mut upper = 0.0;
@@ -500,17 +499,20 @@ pub(super) struct Rows {
 }
 
 impl Rows {
-    /// The motion's rows `[u, v]` of a substep of length `h` on `map`:
-    /// `map.rows` plus `h - map.h` times `map.rows_rate` (the work's rows
-    /// likewise, at a run's end: [`WorkSums::add_work`]).
+    /// The rows of a substep of length `h` on `map`: `map.rows` plus `h -
+    /// map.h` times `map.rows_rate`.
     #[inline]
-    fn motion(map: &ExactMap, h: f64) -> [[f64; 4]; 2] {
+    pub(super) fn new(map: &ExactMap, h: f64) -> Rows {
         let delta = h - map.h;
         let (r, d) = (&map.rows, &map.rows_rate);
-        [
-            std::array::from_fn(|k| r.u[k] + delta * d.u[k]),
-            std::array::from_fn(|k| r.v[k] + delta * d.v[k]),
-        ]
+        Rows {
+            u: std::array::from_fn(|k| r.u[k] + delta * d.u[k]),
+            v: std::array::from_fn(|k| r.v[k] + delta * d.v[k]),
+            work_p: std::array::from_fn(|k| r.work_p[k] + delta * d.work_p[k]),
+            work_l: std::array::from_fn(|k| r.work_l[k] + delta * d.work_l[k]),
+            work_v: std::array::from_fn(|k| r.work_v[k] + delta * d.work_v[k]),
+            c: r.c,
+        }
     }
 
     /// The map's own rows (`delta = 0`) and their rates in `delta`, from
