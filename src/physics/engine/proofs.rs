@@ -89,10 +89,7 @@ pub(super) fn slip_guard_proved(
     coarse: f64,
     bound: impl FnOnce() -> f64,
 ) -> bool {
-    let clear = |bound: f64| {
-        let sag = 0.125 * h * h * bound;
-        g0 > sag && g1 > sag
-    };
+    let clear = |bound: f64| g0 > 0.125 * h * h * bound && g1 > 0.125 * h * h * bound;
     clear(coarse) || {
         let bound = bound();
         clear(bound) || {

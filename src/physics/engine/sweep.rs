@@ -200,14 +200,9 @@ impl Simulator {
         let first = maps.index(sys, mass, canonical_length(cur.h));
         let mut map = maps.get(first);
         let mut rows = Rows::new(map, cur.h);
-        let [mut row_u, mut row_v] = [rows.u, rows.v];
+        let (mut row_u, mut row_v) = (rows.u, rows.v);
         // The upper clusters' terms in `A_c` over a substep of `h`.
-        let terms = |h: f64| -> [[f64; NC]; 2] {
-            [
-                std::array::from_fn(|c| 0.5 * h * h * accel_c[c]),
-                std::array::from_fn(|c| h * accel_c[c]),
-            ]
-        };
+        let terms = |h: f64| [0.5 * h * h, h].map(|k| accel_c.map(|a| k * a));
         let [mut half_h2a, mut ha] = terms(cur.h);
         let (mut w2, mut cm) = (map.w2, map.cm);
 
@@ -229,23 +224,18 @@ impl Simulator {
         // four roundings of it).
         let mut tau = 0.0;
         let mut tau_lim = f64::INFINITY;
-        for m in 1..NC.saturating_sub(1) {
+        for m in (1..NC.saturating_sub(1)).filter(|&m| slip_sign[m] != 0.0) {
             let sign = slip_sign[m];
-            if sign == 0.0 {
-                continue;
-            }
             let g0 = sign * (vel_start[m + 1] - vel_start[m]);
             let rate = sign * (accel_c[m + 1] - accel_c[m]);
             let lim = if g0 >= 0.0 && rate >= 0.0 && g0 + rate > 0.0 {
                 f64::INFINITY
-            } else if g0 > 0.0 {
+            } else if g0 > 0.0 && rate < 0.0 {
                 g0 / -rate * (1.0 - 4.0 * f64::EPSILON)
             } else {
                 0.0
             };
-            if !(lim >= tau_lim) {
-                tau_lim = lim;
-            }
+            tau_lim = tau_lim.min(lim);
         }
         // The structure's slip's peak where its interface is free (no guard:
         // raised substep by substep).
@@ -308,7 +298,7 @@ impl Simulator {
                             (w2, cm) = (map.w2, map.cm);
                         }
                         rows = Rows::new(map, cur.h);
-                        [row_u, row_v] = [rows.u, rows.v];
+                        (row_u, row_v) = (rows.u, rows.v);
                         [half_h2a, ha] = terms(cur.h);
                     }
                     lean[1] = pieces.promised();
@@ -454,11 +444,7 @@ impl Simulator {
                 let peak = &mut self.peak_slip[j];
                 if slip_sign[m] != 0.0 {
                     // Its guard held: it kept its direction.
-                    for x in [start.abs(), end.abs()] {
-                        if x > *peak {
-                            *peak = x;
-                        }
-                    }
+                    *peak = peak.max(start.abs()).max(end.abs());
                 } else if m == 0 {
                     *peak = peak_slip0;
                 } else {
