@@ -318,7 +318,7 @@ impl Simulator {
             let hs = cur.h;
             let t1 = if cur.i == cur.n { cur.t_end } else { t0 + hs };
             let tau1 = tau + hs;
-            if NC > 2 && !(tau1 < tau_lim) {
+            if NC > 2 && tau1 >= tau_lim {
                 break;
             }
             let fext_rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
