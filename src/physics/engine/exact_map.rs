@@ -109,8 +109,10 @@ pub(super) struct ExactMap {
     /// term: `five_over_three * sup_v(3)` bounds `|v^(5)|` too (every term
     /// is non-negative), which saves computing both on every substep.
     pub(super) five_over_three: f64,
-    /// The same for `|v'|` (`sup|u''|`), for the quick test of the peak of u.
+    /// The same for `|v'|` (`sup|u''|`), for the quick test of the peak of u,
+    /// and for `|v''|`, for the quick test of the structure's slip guard.
     pub(super) one_over_three: f64,
+    pub(super) two_over_three: f64,
     /// k / mass, c / mass, c.
     pub(super) w2: f64,
     pub(super) cm: f64,
@@ -213,10 +215,12 @@ impl ExactMap {
                 .fold(0.0, f64::max)
         };
         let (five_over_three, one_over_three) = (over_three(5), over_three(1));
+        let two_over_three = over_three(2);
         let mut map = ExactMap {
             degree,
             five_over_three,
             one_over_three,
+            two_over_three,
             h,
             u,
             v,

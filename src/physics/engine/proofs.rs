@@ -79,19 +79,23 @@ pub(super) fn in_band_proved(
 
 /// Whether the slip guard between the structure's cluster and the one above
 /// stays positive over a substep of length `h`: its ends `g0`, `g1` (the
-/// signed relative velocity), `|g''| <= bound`, and (only when that does not
-/// decide) its rates at the ends, `rates()`.
+/// signed relative velocity), `|g''| <= bound() <= coarse`, and (only when
+/// those do not decide) its rates at the ends, `rates()`.
 #[inline(always)]
 pub(super) fn slip_guard_proved(
     [g0, g1]: [f64; 2],
     rates: impl FnOnce() -> [f64; 2],
     h: f64,
-    bound: f64,
+    coarse: f64,
+    bound: impl FnOnce() -> f64,
 ) -> bool {
-    let sag = 0.125 * h * h * bound;
-    (g0 > sag && g1 > sag) || {
-        let [d0, d1] = rates();
-        stays_positive([g0, d0, g1, d1], h, bound)
+    let clear = |bound: f64| g0 > 0.125 * h * h * bound && g1 > 0.125 * h * h * bound;
+    clear(coarse) || {
+        let bound = bound();
+        clear(bound) || {
+            let [d0, d1] = rates();
+            stays_positive([g0, d0, g1, d1], h, bound)
+        }
     }
 }
 

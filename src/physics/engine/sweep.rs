@@ -157,6 +157,12 @@ impl Simulator {
     /// structure's; moving interface m between clusters m and m + 1), with
     /// the input rule `Dynamics::input_rule::<AG>` (`AG`: a prescribed
     /// support).
+    ///
+    /// The clusters above the structure's have constant absolute
+    /// accelerations `A_c` in the mode: a guard between two of them is
+    /// linear in time over the run (the ground's terms cancel), so it holds
+    /// up to its zero, found once per run. A slip whose guard holds keeps
+    /// its direction: its peak is at an end of the run.
     #[inline(never)]
     fn sweep_clusters<const NC: usize, const AG: bool>(
         &mut self,
@@ -195,14 +201,16 @@ impl Simulator {
         let mut map = maps.get(first);
         let mut rows = Rows::new(map, cur.h);
         let (mut row_u, mut row_v) = (rows.u, rows.v);
+        // The upper clusters' terms in `A_c` over a substep of `h`.
+        let terms = |h: f64| [0.5 * h * h, h].map(|k| accel_c.map(|a| k * a));
+        let [mut half_h2a, mut ha] = terms(cur.h);
         let (mut w2, mut cm) = (map.w2, map.cm);
 
         // The run's state.
         let mut u0 = self.u[0];
         let u0_start = u0;
-        let mut vel: [f64; NC] = std::array::from_fn(|c| self.v[d.bottom[c]]);
-        let vel_start = vel;
-        let mut slip: [f64; NC] = std::array::from_fn(|m| {
+        let vel_start: [f64; NC] = std::array::from_fn(|c| self.v[d.bottom[c]]);
+        let slip_start: [f64; NC] = std::array::from_fn(|m| {
             let j = iface[m];
             if NC > 1 {
                 self.u[j] - self.u[j - 1]
@@ -210,9 +218,29 @@ impl Simulator {
                 0.0
             }
         });
-        let slip_start = slip;
-        let mut shift = [0.0; NC];
-        let mut peak_slip: [f64; NC] = std::array::from_fn(|m| self.peak_slip[iface[m]]);
+        let (mut vel, mut shift, mut slip) = (vel_start, [0.0; NC], slip_start);
+        // The run's length, and the guards between upper clusters, `g(0) >=
+        // 0` and `g > 0` after: the run stops before the first zero (less
+        // four roundings of it).
+        let mut tau = 0.0;
+        let mut tau_lim = f64::INFINITY;
+        for m in (1..NC.saturating_sub(1)).filter(|&m| slip_sign[m] != 0.0) {
+            let sign = slip_sign[m];
+            let g0 = sign * (vel_start[m + 1] - vel_start[m]);
+            let rate = sign * (accel_c[m + 1] - accel_c[m]);
+            let lim = if g0 >= 0.0 && rate >= 0.0 && g0 + rate > 0.0 {
+                f64::INFINITY
+            } else if g0 > 0.0 && rate < 0.0 {
+                g0 / -rate * (1.0 - 4.0 * f64::EPSILON)
+            } else {
+                0.0
+            };
+            tau_lim = tau_lim.min(lim);
+        }
+        // The structure's slip's peak where its interface is free (no guard:
+        // raised substep by substep).
+        let sign0 = slip_sign[0];
+        let mut peak_slip0 = self.peak_slip[iface[0]];
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let mut sums = WorkSums::default();
         // Work of the substeps already summed and flushed.
@@ -226,7 +254,7 @@ impl Simulator {
         // of `lean[1]` taken (the source is told at the end).
         let mut lean = [0, pieces.promised()];
 
-        'steps: loop {
+        loop {
             if cur.i > cur.n {
                 let next = if lean[0] < lean[1] {
                     pieces.continuing(lean[0])
@@ -261,8 +289,8 @@ impl Simulator {
                         // A record's next sample: the same substeps, map and rows.
                         (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
                     } else {
-                        cur = Piece::new(t0, t_end, &exc, h_max);
                         sums.flush(&rows, mass, load_accel, &mut work);
+                        cur = Piece::new(t0, t_end, &exc, h_max);
                         let hc = canonical_length(cur.h);
                         if hc != map.h {
                             let i = maps.index(sys, mass, hc);
@@ -271,6 +299,7 @@ impl Simulator {
                         }
                         rows = Rows::new(map, cur.h);
                         (row_u, row_v) = (rows.u, rows.v);
+                        [half_h2a, ha] = terms(cur.h);
                     }
                     lean[1] = pieces.promised();
                     // A0 carries over: it is continuous (a jump of Fext ends the run).
@@ -288,6 +317,10 @@ impl Simulator {
             // of the times.
             let hs = cur.h;
             let t1 = if cur.i == cur.n { cur.t_end } else { t0 + hs };
+            let tau1 = tau + hs;
+            if NC > 2 && tau1 >= tau_lim {
+                break;
+            }
             let fext_rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
             let z = [
                 u0,
@@ -319,33 +352,19 @@ impl Simulator {
             let (mut du, mut v_end) = ([0.0; NC], [0.0; NC]);
             (du[0], v_end[0]) = (u1 - u0, v1);
             for c in 1..NC {
-                du[c] = hs * vel[c] + 0.5 * hs * hs * accel_c[c] - g2;
-                v_end[c] = vel[c] + hs * accel_c[c] - g1;
+                du[c] = hs * vel[c] + half_h2a[c] - g2;
+                v_end[c] = vel[c] + ha[c] - g1;
             }
-            let s2 = if NC > 1 {
-                map.sup_v_abs(2, &z_abs)
-            } else {
-                0.0
-            };
-            for m in 0..NC - 1 {
-                let sign = slip_sign[m];
-                if sign == 0.0 {
-                    continue;
-                }
-                let (g0, g1) = (
-                    sign * (vel[m + 1] - vel[m]),
-                    sign * (v_end[m + 1] - v_end[m]),
-                );
-                let holds = if m == 0 {
-                    // |g''| <= sup|v0''| + |ag'|.
-                    let rates = || [sign * (accel_c[1] - a_abs), sign * (accel_c[1] - a1)];
-                    slip_guard_proved([g0, g1], rates, hs, s2 + inp.ag_rate.abs())
-                } else {
-                    // Linear in time between two upper clusters.
-                    g0 >= 0.0 && g1 > 0.0
-                };
-                if !holds {
-                    break 'steps;
+            if NC > 1 && sign0 != 0.0 {
+                // The structure's slip guard; |g''| <= sup|v0''| + |ag'|, at
+                // most `two_over_three` sup|v0'''| + |ag'|.
+                let (g0, g1) = (sign0 * (vel[1] - vel[0]), sign0 * (v_end[1] - v1));
+                let rates = || [sign0 * (accel_c[1] - a_abs), sign0 * (accel_c[1] - a1)];
+                let ag_rate = inp.ag_rate.abs();
+                let coarse = map.two_over_three * s3 + ag_rate;
+                let bound = || map.sup_v_abs(2, &z_abs) + ag_rate;
+                if !slip_guard_proved([g0, g1], rates, hs, coarse, bound) {
+                    break;
                 }
             }
             // Peaks of |u0| and |A0|; where the bounds cannot exclude a new
@@ -364,29 +383,17 @@ impl Simulator {
                     break;
                 }
             }
-            // Slips. One whose guard was proved above keeps its direction:
-            // it peaks at an end. A free interface on the structure:
-            // slip''' = -(ag' + v0''), slip'''' = -v0'''; between upper
-            // clusters a quadratic in time, which the cubic gives exactly.
+            // A free interface on the structure: slip''' = -(ag' + v0''),
+            // slip'''' = -v0'''.
             let mut new_slip = slip;
             for m in 0..NC - 1 {
-                let increment = du[m + 1] - du[m];
-                let (vr0, vr1) = (vel[m + 1] - vel[m], v_end[m + 1] - v_end[m]);
-                new_slip[m] = slip[m] + increment;
-                let ends = [slip[m], vr0, new_slip[m], vr1];
-                if slip_sign[m] != 0.0 {
-                    let (e0, e1) = (slip[m].abs(), new_slip[m].abs());
-                    let end = if e0 > e1 { e0 } else { e1 };
-                    if end > peak_slip[m] {
-                        peak_slip[m] = end;
-                    }
-                } else if m == 0 {
-                    let third = s2 + inp.ag_rate.abs();
-                    if !raise_peak_proved(&mut peak_slip[m], ends, hs, s3, || third) {
-                        break 'steps;
-                    }
-                } else {
-                    hermite::raise_peak(&mut peak_slip[m], ends[0], vr0, ends[2], vr1, hs);
+                new_slip[m] = slip[m] + (du[m + 1] - du[m]);
+            }
+            if NC > 1 && sign0 == 0.0 {
+                let third = map.sup_v_abs(2, &z_abs) + inp.ag_rate.abs();
+                let ends = [slip[0], vel[1] - vel[0], new_slip[0], v_end[1] - v1];
+                if !raise_peak_proved(&mut peak_slip0, ends, hs, s3, || third) {
+                    break;
                 }
             }
             // Taken.
@@ -395,7 +402,7 @@ impl Simulator {
             for c in 1..NC {
                 shift[c] += du[c];
             }
-            (u0, vel, a_abs) = (u1, v_end, a1);
+            (u0, vel, a_abs, tau) = (u1, v_end, a1, tau1);
             (inp.ag, inp.fext) = (ag1, fext1);
             t0 = t1;
             cur.i += 1;
@@ -432,8 +439,20 @@ impl Simulator {
             move_bodies(&mut self.u, &mut self.v, d, n, u0, &shift_all, &vel_all);
             for m in 0..NC - 1 {
                 let j = iface[m];
-                self.e_friction[j] -= d.slip_force[j] * (slip[m] - slip_start[m]);
-                self.peak_slip[j] = peak_slip[m];
+                let (start, end) = (slip_start[m], slip[m]);
+                self.e_friction[j] -= d.slip_force[j] * (end - start);
+                let peak = &mut self.peak_slip[j];
+                if slip_sign[m] != 0.0 {
+                    // Its guard held: it kept its direction.
+                    *peak = peak.max(start.abs()).max(end.abs());
+                } else if m == 0 {
+                    *peak = peak_slip0;
+                } else {
+                    // Free between upper clusters: a quadratic in τ over the
+                    // run, which the cubic gives exactly.
+                    let (vr0, vr1) = (vel_start[m + 1] - vel_start[m], vel[m + 1] - vel[m]);
+                    hermite::raise_peak(peak, start, vr0, end, vr1, tau);
+                }
             }
             self.peak_u0 = peak_u0;
             self.peak_a0 = peak_a0;
