@@ -49,9 +49,8 @@ mod sweep;
 pub(crate) use bodies::{move_bodies, upper_cluster_step};
 use pieces::Piece;
 pub use pieces::{
-    auto_step, same_up_to_rounding, substeps, Excitation, PieceSource, Plain, ACCURATE_H_OMEGA,
-    ACCURATE_MAX_STEP, EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
-    STABLE_H_OMEGA,
+    same_up_to_rounding, substeps, Excitation, PieceSource, Plain, EVENT_TIME_TOL, FINE_H_OMEGA,
+    FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
 };
 pub use proofs::PRESCRIBED_MAX_STEP;
 pub use report::{Outputs, SimError, Stats};
@@ -69,10 +68,6 @@ pub struct Simulator {
     /// Largest internal step: the exact default's longest substep, or the
     /// step of the RK4 baseline (solver 2).
     h_max: f64,
-    /// The exact default (solver 1): substeps on the exact map where they
-    /// are proved free of switches and new peaks, the exact motion with
-    /// switches located on it elsewhere.
-    exact: bool,
     /// Stretches of the exact motion where a substep cannot be decided.
     h_fine: f64,
     /// Exact maps in use (derived data only: rebuilt identically on demand).
@@ -114,8 +109,7 @@ impl Simulator {
         let dynamics = Dynamics::new(&sys, &mode);
         let mut sim = Simulator {
             params: params.clone(),
-            h_max: auto_step(settings, sys.omega_p),
-            exact: settings.method == Method::EventLocated,
+            h_max: 0.0, // by the method, below
             // (omega_p = 0 on a prescribed support: FINE_MAX_STEP.)
             h_fine: (FINE_H_OMEGA / sys.omega_p).min(FINE_MAX_STEP),
             maps: exact_map::MapCache::default(),
@@ -142,9 +136,10 @@ impl Simulator {
             tries: 0,
             work_limit: u64::MAX,
         };
-        if sim.exact {
-            sim.h_max = sim.map_step();
-        }
+        sim.h_max = match settings.method {
+            Method::EventLocated => sim.map_step(),
+            Method::StepEnd => crate::baselines::auto_step(settings.max_step, sim.sys.omega_p),
+        };
         sim.take_reference();
         sim.resolve_mode(0);
         sim.take_reference();
@@ -158,10 +153,8 @@ impl Simulator {
     pub fn reset(&mut self) {
         let mobility = self.sys.mobility;
         *self = Simulator::new(&self.params, &self.settings).expect("validated before");
-        self.sys.mobility = mobility;
-        if mobility != 0.0 && self.sys.prescribed() {
-            self.rebuild_dynamics();
-        }
+        self.set_support_mobility(mobility)
+            .expect("validated before");
     }
 
     /// Sets the displacement and velocity of every body (relative to the
@@ -195,8 +188,7 @@ impl Simulator {
         // mode: the slips set here must have theirs already (the slips set
         // here are the reference of the resolution, the mode it gives the
         // reference from then on).
-        self.dyn_cache.clear();
-        self.dynamics = Dynamics::new(&self.sys, &self.mode);
+        self.rebuild_dynamics();
         self.take_reference();
         self.resolve_mode(0);
         self.take_reference();
@@ -205,7 +197,7 @@ impl Simulator {
         for j in 1..=n {
             self.peak_slip[j] = (self.u[j] - self.u[j - 1]).abs();
         }
-        self.peak_a0 = self.structure_accel().abs();
+        self.peak_a0 = self.dynamics.accel(0, self.load0()).abs();
     }
 
     /// Sets the support's mobility `m_b = d(floor acceleration) /
@@ -225,13 +217,6 @@ impl Simulator {
             }
         }
         Ok(())
-    }
-
-    /// The reference mode's `(M_ref, s_ref)` of a prescribed support's law
-    /// ([`mode::support_law`]): the mass stuck to the support and the load
-    /// on it in the mode in force when the inputs were last set.
-    pub fn support_reference(&self) -> (f64, f64) {
-        (self.sys.ref_mass, self.sys.ref_load)
     }
 
     /// The support's mobility ([`Simulator::set_support_mobility`]).
@@ -548,10 +533,6 @@ impl Simulator {
         self.dyn_cache.clear();
         self.dynamics = Dynamics::new(&self.sys, &self.mode);
     }
-
-    fn structure_accel(&self) -> f64 {
-        self.dynamics.accel(0, self.load0())
-    }
 }
 
 #[cfg(test)]
@@ -646,36 +627,6 @@ mod tests {
         }
         assert_eq!(sim.outputs(), copy.outputs());
         assert!(Simulator::read_state(&mut ByteReader::new(&w.buf[..40])).is_err());
-    }
-
-    #[test]
-    fn internal_step_respects_both_bounds() {
-        // The exact default: substeps of omega h = MAP_H_OMEGA, or maxStep
-        // where shorter; the RK4 baseline (solver 2): the automatic step,
-        // maxStep bounded by the stability limit STABLE_H_OMEGA / omega.
-        let p = Params::default();
-        let omega = 2.0 * std::f64::consts::PI / p.tp;
-        let auto = Simulator::new(&p, &Settings::default()).unwrap();
-        assert_eq!(auto.max_internal_step(), 0.5 / omega);
-        for (max_step, expected) in [(1e-4, 1e-4), (10.0, 0.5 / omega)] {
-            let s = Settings {
-                max_step,
-                ..Settings::default()
-            };
-            let sim = Simulator::new(&p, &s).unwrap();
-            assert_eq!(sim.max_internal_step(), expected);
-        }
-        let baseline = |max_step| Settings {
-            method: Method::StepEnd,
-            max_step,
-        };
-        let sim = Simulator::new(&p, &baseline(0.0)).unwrap();
-        assert_eq!(
-            sim.max_internal_step(),
-            (ACCURATE_H_OMEGA / omega).min(ACCURATE_MAX_STEP)
-        );
-        let sim = Simulator::new(&p, &baseline(10.0)).unwrap();
-        assert_eq!(sim.max_internal_step(), STABLE_H_OMEGA / omega);
     }
 
     #[test]

@@ -2,12 +2,6 @@
 //! through two step ends. Sampling only at step ends is O(h^2) accurate for a
 //! peak; the cubic keeps it at the method's order.
 
-/// Largest |p(θ)| over θ in [0, 1] for the cubic with values `y0`, `y1` and
-/// time derivatives `d0`, `d1` at the ends of a step of length `h`.
-pub fn max_abs(y0: f64, d0: f64, y1: f64, d1: f64, h: f64) -> f64 {
-    max_abs_interior(y0, d0, y1, d1, h)
-}
-
 /// Raises `peak` to the largest |p| of the cubic (as [`max_abs`]) when that
 /// is larger. Returns at once, without solving for the cubic's extrema,
 /// when it cannot exceed `peak`: the Hermite basis bounds |p| by
@@ -20,15 +14,17 @@ pub fn raise_peak(peak: &mut f64, y0: f64, d0: f64, y1: f64, d1: f64, h: f64) {
     if ends + 4.0 / 27.0 * h * (d0.abs() + d1.abs()) <= *peak {
         return;
     }
-    let largest = max_abs_interior(y0, d0, y1, d1, h);
+    let largest = max_abs(y0, d0, y1, d1, h);
     if largest > *peak {
         *peak = largest;
     }
 }
 
-/// [`max_abs`] itself, out of line: called on a few steps only.
+/// Largest |p(θ)| over θ in [0, 1] for the cubic with values `y0`, `y1` and
+/// time derivatives `d0`, `d1` at the ends of a step of length `h`. Out of
+/// line: [`raise_peak`] calls it on a few steps only.
 #[inline(never)]
-fn max_abs_interior(y0: f64, d0: f64, y1: f64, d1: f64, h: f64) -> f64 {
+pub fn max_abs(y0: f64, d0: f64, y1: f64, d1: f64, h: f64) -> f64 {
     let b = h * d0;
     let c = 3.0 * (y1 - y0) - h * (2.0 * d0 + d1);
     let d = 2.0 * (y0 - y1) + h * (d0 + d1);

@@ -158,22 +158,16 @@ pub fn check_scalar(field: &str, value: f64) -> Result<(), ParamError> {
 impl Params {
     /// Checks every field; the first one out of range is reported.
     pub fn validate(&self) -> Result<(), ParamError> {
-        if self.n_blocks > MAX_BLOCKS {
-            return Err(ParamError {
-                field: "nBlocks".into(),
-                value: self.n_blocks as f64,
-                allowed: "an integer from 0 to 8".into(),
-            });
-        }
-        if self.support == Support::Prescribed && self.n_blocks == 0 {
-            return Err(ParamError {
-                field: "nBlocks".into(),
-                value: 0.0,
-                allowed: "an integer from 1 to 8 on a prescribed support (a stack of no block \
-                          has nothing to compute)"
-                    .into(),
-            });
-        }
+        let (n, on_support) = (self.n_blocks, self.support == Support::Prescribed);
+        check(
+            "nBlocks",
+            n as f64,
+            n <= MAX_BLOCKS,
+            "an integer from 0 to 8",
+        )?;
+        let allowed = "an integer from 1 to 8 on a prescribed support (a stack of no block has \
+                       nothing to compute)";
+        check("nBlocks", n as f64, n > 0 || !on_support, allowed)?;
         for (name, value) in [
             ("mp", self.mp),
             ("Tp", self.tp),
@@ -217,7 +211,7 @@ pub struct Settings {
     /// Largest internal step (s); 0: automatic. The exact default stays
     /// exact at any value (a shorter substep only costs time); for the RK4
     /// baseline it replaces the automatic accuracy bound
-    /// ([`crate::physics::engine::auto_step`]) within the RK4 stability bound
+    /// ([`crate::baselines::auto_step`]) within the RK4 stability bound
     /// of the bare structure.
     pub max_step: f64,
 }
