@@ -56,27 +56,3 @@ pub fn max_abs(y0: f64, d0: f64, y1: f64, d1: f64, h: f64) -> f64 {
     }
     best
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn finds_the_interior_peak_of_a_cubic_exactly() {
-        // p(t) = sin-like cubic t - t^3 on [0, 1] over h = 1: peak at 1/sqrt(3).
-        let f = |t: f64| t - t * t * t;
-        let df = |t: f64| 1.0 - 3.0 * t * t;
-        let expected = f(1.0 / 3f64.sqrt()); // analytic maximum
-        let got = max_abs(f(0.0), df(0.0), f(1.0), df(1.0), 1.0);
-        assert!((got - expected).abs() < 1e-15);
-        // Scaled step: same polynomial in physical time over h = 0.01.
-        let h = 0.01;
-        let g = |t: f64| f(t / h);
-        let dg = |t: f64| df(t / h) / h;
-        let got = max_abs(g(0.0), dg(0.0), g(h), dg(h), h);
-        assert!((got - expected).abs() < 1e-14);
-        // Monotone data: the peak is an end value.
-        assert_eq!(max_abs(1.0, 1.0, 2.0, 1.0, 1.0), 2.0);
-        assert_eq!(max_abs(-3.0, 1.0, -2.0, 1.0, 1.0), 3.0);
-    }
-}
