@@ -116,7 +116,10 @@ pub(super) struct Piece {
 impl Piece {
     pub(super) fn new(t_ref: f64, t_end: f64, exc: &Excitation, h_max: f64) -> Piece {
         let length = t_end - t_ref;
-        let (n, h) = if length > 0.0 {
+        // One substep without a division: most of a record's samples.
+        let (n, h) = if length > 0.0 && length <= h_max {
+            (1, length)
+        } else if length > 0.0 {
             let n = substeps(length, h_max);
             (n as usize, length / n)
         } else {
