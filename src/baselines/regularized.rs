@@ -11,7 +11,7 @@
 use crate::physics::engine::{Excitation, Outputs, SimError};
 use crate::physics::hermite;
 use crate::physics::params::{check_scalar, ParamError, Params, Support, MAX_BODIES, MIN_MAX_STEP};
-use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
+use crate::physics::snapshot::{check_peaks, ByteReader, ByteWriter, SnapshotError};
 use crate::physics::system::System;
 
 /// Full state: u and v of every body, then input, viscous and friction work.
@@ -208,12 +208,7 @@ impl RegularizedSimulator {
         if !finite || self.t < 0.0 {
             return Err("a value of the saved state is not finite, or its time is negative".into());
         }
-        let peaks = [self.peak_u0, self.peak_a0]
-            .into_iter()
-            .chain(self.peak_slip);
-        if peaks.into_iter().any(|p| p < 0.0) {
-            return Err("a peak of the saved state is negative".into());
-        }
+        check_peaks([self.peak_u0, self.peak_a0], &self.peak_slip)?;
         let beyond = (n + 1..MAX_BODIES)
             .any(|i| self.y[i] != 0.0 || self.y[MAX_BODIES + i] != 0.0 || self.peak_slip[i] != 0.0);
         if beyond || self.peak_slip[0] != 0.0 {
