@@ -4,6 +4,7 @@
 mod common;
 use common::*;
 use stacked_live_load::ground::record;
+use stacked_live_load::physics::hermite;
 use stacked_live_load::physics::sdof;
 use stacked_live_load::*;
 use std::f64::consts::PI;
@@ -306,4 +307,47 @@ fn bodies_that_never_slip_keep_exactly_zero_slip() {
         assert_eq!(o.peak_slip, [0.0; MAX_BLOCKS]);
     }
     assert_eq!(worst, 0.0);
+}
+
+#[test]
+fn sdof_recurrence_matches_closed_forms() {
+    // Step load p = 1 from rest: u = (1 - e^{-ζωt}(cos ωd t + ζ/√(1-ζ²) sin ωd t)) / ω².
+    let (w, z) = (3.0, 0.05);
+    let wd = w * (1.0f64 - z * z).sqrt();
+    let mut s = (0.0, 0.0);
+    let dt = 0.37;
+    for i in 1..=20 {
+        s = sdof::step(w, z, dt, s, 1.0, 1.0);
+        let t = i as f64 * dt;
+        let exact = (1.0
+            - (-z * w * t).exp() * ((wd * t).cos() + z / (1.0 - z * z).sqrt() * (wd * t).sin()))
+            / (w * w);
+        assert!((s.0 - exact).abs() < 1e-14, "step load at t = {t}");
+    }
+    // Ramp p = t on an undamped oscillator: u = (t - sin(ωt)/ω) / ω².
+    let mut s = (0.0, 0.0);
+    for i in 0..30 {
+        s = sdof::step(w, 0.0, dt, s, i as f64 * dt, (i + 1) as f64 * dt);
+    }
+    let t = 30.0 * dt;
+    assert!((s.0 - (t - (w * t).sin() / w) / (w * w)).abs() < 1e-13);
+}
+
+#[test]
+fn hermite_peak_of_a_cubic_is_exact() {
+    // p(t) = sin-like cubic t - t^3 on [0, 1] over h = 1: peak at 1/sqrt(3).
+    let f = |t: f64| t - t * t * t;
+    let df = |t: f64| 1.0 - 3.0 * t * t;
+    let expected = f(1.0 / 3f64.sqrt()); // analytic maximum
+    let got = hermite::max_abs(f(0.0), df(0.0), f(1.0), df(1.0), 1.0);
+    assert!((got - expected).abs() < 1e-15);
+    // Scaled step: same polynomial in physical time over h = 0.01.
+    let h = 0.01;
+    let g = |t: f64| f(t / h);
+    let dg = |t: f64| df(t / h) / h;
+    let got = hermite::max_abs(g(0.0), dg(0.0), g(h), dg(h), h);
+    assert!((got - expected).abs() < 1e-14);
+    // Monotone data: the peak is an end value.
+    assert_eq!(hermite::max_abs(1.0, 1.0, 2.0, 1.0, 1.0), 2.0);
+    assert_eq!(hermite::max_abs(-3.0, 1.0, -2.0, 1.0, 1.0), 3.0);
 }

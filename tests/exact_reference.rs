@@ -238,3 +238,28 @@ fn eight_block_stack_under_a_strong_record() {
     }
     assert!(checked == gm.time.len() - 1);
 }
+
+#[test]
+fn the_default_is_exact_at_any_max_step() {
+    // maxStep only shortens the exact default's substeps: the same
+    // motion to rounding (expected: equal within 1e-11 of the peak).
+    let exc = Excitation {
+        ag: 4.0,
+        ag_rate: -25.0,
+        fext: 300.0,
+        fext_rate: -2000.0,
+    };
+    let run = |max_step| {
+        let s = Settings {
+            max_step,
+            ..Settings::default()
+        };
+        let mut sim = Simulator::new(&Params::default(), &s).unwrap();
+        sim.advance(0.4, &exc).unwrap();
+        sim.outputs()
+    };
+    let (a, b) = (run(0.0), run(3e-4));
+    assert!(a.n_events > 0);
+    assert!((a.up - b.up).abs() < 1e-11 * a.peak_up, "{} {}", a.up, b.up);
+    assert!((a.peak_slip[0] - b.peak_slip[0]).abs() < 1e-11 * a.peak_up);
+}

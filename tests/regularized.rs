@@ -5,6 +5,8 @@ mod common;
 use common::*;
 use stacked_live_load::baselines::regularized::{self, RegularizedSimulator};
 use stacked_live_load::ground::record;
+use stacked_live_load::physics::snapshot::{ByteReader, ByteWriter};
+use stacked_live_load::physics::solver::{Solver, SolverKind, Stepper};
 use stacked_live_load::*;
 use std::f64::consts::PI;
 
@@ -184,4 +186,38 @@ fn solver_3_steps_within_the_stability_bound_of_the_whole_stack() {
     let (below, above) = (energy_error(h), energy_error(1.2 * h));
     eprintln!("8 blocks: residual {below:.1e} at the bound, {above:.1e} at 1.2 times it");
     assert!(below < 1e-9 && above > 1e-5, "{below:e} {above:e}");
+}
+
+#[test]
+fn codes_round_trip_and_bad_settings_are_named() {
+    for code in 1..=3 {
+        assert_eq!(SolverKind::from_code(code).unwrap().code(), code);
+    }
+    assert!(SolverKind::from_code(0).is_none());
+    let p = Params::default();
+    let e = Solver::new(&p, SolverKind::Regularized, 0.0, 0.0).unwrap_err();
+    assert_eq!(e.field, "frictionEps");
+    let e = Solver::new(&p, SolverKind::StepEnd, -1.0, 1e-3).unwrap_err();
+    assert_eq!(e.field, "maxStep");
+    // The exact engine ignores frictionEps.
+    assert!(Solver::new(&p, SolverKind::EventLocated, 0.0, 0.0).is_ok());
+}
+
+#[test]
+fn a_regularized_state_round_trips_bit_for_bit() {
+    let p = Params::default();
+    let mut s = Solver::new(&p, SolverKind::Regularized, 1e-4, 1e-3).unwrap();
+    let exc = Excitation {
+        ag: 3.0,
+        ag_rate: -4.0,
+        ..Default::default()
+    };
+    s.advance(0.5, &exc).unwrap();
+    let mut w = ByteWriter::default();
+    s.write_state(&mut w);
+    let mut copy = Solver::read_state(&mut ByteReader::new(&w.buf)).unwrap();
+    s.advance(1.0, &exc).unwrap();
+    copy.advance(1.0, &exc).unwrap();
+    assert_eq!(s.outputs(), copy.outputs());
+    assert!(s.outputs().peak_slip[0] > 0.0, "the scene slips");
 }

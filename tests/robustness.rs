@@ -3,10 +3,16 @@
 //! 0.05-8 s, damping 0-20 %, records scaled to 0.2-1.5 g, and a step in the
 //! external force. Every run must end finite, with every mode switch resolved
 //! consistently, no chatter guard needed, and the energy balance closed to 1e-8.
+//! Also the engine's API at its edges: bad parameters and inputs refused by
+//! name, substeps that rounding does not add to, and a reset or a saved
+//! state that repeats a run bit for bit.
 
 mod common;
 use common::*;
 use stacked_live_load::ground::record;
+use stacked_live_load::physics::engine::substeps;
+use stacked_live_load::physics::params::check_scalar;
+use stacked_live_load::physics::snapshot::{ByteReader, ByteWriter};
 use stacked_live_load::*;
 
 #[test]
@@ -73,4 +79,126 @@ fn random_scenes_stay_consistent_and_balanced() {
         worst = worst.max(residual);
     }
     eprintln!("1000 random scenes; worst energy residual {worst:.1e}");
+}
+
+#[test]
+fn defaults_are_valid_and_bad_fields_are_named() {
+    assert!(Params::default().validate().is_ok());
+    let mut p = Params::default();
+    p.alpha[1] = -1.0;
+    assert_eq!(p.validate().unwrap_err().field, "alpha[2]");
+    let mut p = Params::default();
+    p.muk[0] = 0.2;
+    let e = p.validate().unwrap_err();
+    assert_eq!(e.field, "muk[1]");
+    assert!(e.to_string().contains("<= mus"));
+    let mut p = Params::default();
+    p.zeta = f64::NAN;
+    assert_eq!(p.validate().unwrap_err().field, "zeta");
+    for (field, value) in [("Tp", 5e-324), ("Tp", 1e-9), ("mp", 1e300), ("g", 0.0)] {
+        let e = check_scalar(field, value).unwrap_err();
+        assert!(e.to_string().contains("from 1e-3"), "{e}");
+    }
+    assert!(check_scalar("maxStep", 1e-12).is_err());
+    assert!(check_scalar("maxStep", 0.0).is_ok());
+    assert!(check_scalar("recordScale", 1e200).is_err());
+    assert!(check_scalar("recordScale", -2.0).is_ok());
+    assert!(check_scalar("mus[3]", 1e6).is_ok());
+    let mut p = Params::default();
+    p.n_blocks = 9;
+    assert_eq!(p.validate().unwrap_err().field, "nBlocks");
+    // Entries beyond nBlocks are not used and not checked.
+    let mut p = Params::default();
+    p.alpha[5] = -3.0;
+    assert!(p.validate().is_ok());
+}
+
+#[test]
+fn bad_inputs_are_rejected_by_name_and_leave_the_state_alone() {
+    let mut sim = Simulator::new(&Params::default(), &Settings::default()).unwrap();
+    let nan_ag = Excitation {
+        ag: f64::NAN,
+        ..Default::default()
+    };
+    let e = sim.advance(0.01, &nan_ag).unwrap_err();
+    assert!(e.to_string().starts_with("ag = NaN"));
+    let inf_force = Excitation {
+        fext_rate: f64::INFINITY,
+        ..Default::default()
+    };
+    assert!(matches!(
+        sim.advance(0.01, &inf_force),
+        Err(SimError::BadInput {
+            name: "der(Fext)",
+            ..
+        })
+    ));
+    sim.advance(0.01, &Excitation::default()).unwrap();
+    assert!(matches!(
+        sim.advance(0.005, &Excitation::default()),
+        Err(SimError::BadTime { .. })
+    ));
+    assert_eq!(sim.time(), 0.01);
+    let bad = Settings {
+        max_step: -1.0,
+        ..Settings::default()
+    };
+    let e = Simulator::new(&Params::default(), &bad).unwrap_err();
+    assert_eq!(e.field, "maxStep");
+}
+
+#[test]
+fn substeps_round_up_but_not_past_rounding() {
+    // Expected: ceil(length / h_max), with ratios within 1e-9 of an
+    // integer taken as that integer, and at least one step.
+    assert_eq!(substeps(0.005, 0.00125), 4.0);
+    assert_eq!(substeps(0.005 * (1.0 + 1e-12), 0.00125), 4.0);
+    assert_eq!(substeps(0.005 * (1.0 + 1e-6), 0.00125), 5.0);
+    assert_eq!(substeps(0.0049, 0.00125), 4.0);
+    assert_eq!(substeps(1e-9, 0.00125), 1.0);
+    assert_eq!(substeps(7.3, 0.01), 730.0);
+    // Beyond 2^52 every value is an integer: the same rule, by `ceil`.
+    assert_eq!(substeps(1e10, 1e-8), (1e18 * (1.0 - 1e-9f64)).ceil());
+}
+
+#[test]
+fn reset_reproduces_a_run_bit_for_bit() {
+    let mut sim = Simulator::new(&Params::default(), &Settings::default()).unwrap();
+    let exc = Excitation {
+        ag: 3.0,
+        ag_rate: -20.0,
+        ..Default::default()
+    };
+    sim.advance(0.3, &exc).unwrap();
+    let first = sim.outputs();
+    sim.reset();
+    sim.advance(0.3, &exc).unwrap();
+    assert_eq!(sim.outputs(), first);
+    assert!(first.n_events > 0);
+}
+
+#[test]
+fn a_saved_state_continues_bit_for_bit() {
+    let mut sim = Simulator::new(&Params::default(), &Settings::default()).unwrap();
+    let exc = Excitation {
+        ag: 4.0,
+        ag_rate: -30.0,
+        ..Default::default()
+    };
+    sim.advance(0.2, &exc).unwrap();
+    let mut w = ByteWriter::default();
+    sim.write_state(&mut w);
+    let mut copy = Simulator::read_state(&mut ByteReader::new(&w.buf)).unwrap();
+    for s in [&mut sim, &mut copy] {
+        s.advance(
+            0.4,
+            &Excitation {
+                ag: -2.0,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    }
+    assert_eq!(sim.outputs(), copy.outputs());
+    assert!(Simulator::read_state(&mut ByteReader::new(&w.buf[..40])).is_err());
 }

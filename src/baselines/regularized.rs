@@ -6,12 +6,12 @@
 //! equations stiff (eigenvalues about mu g (1 + alpha) / eps), and without
 //! a step bound RK4 diverges above h omega = 2.83 (RESEARCH.md §2).
 //! [`stable_step`] gives the bound for a whole stack; the FMU's solver 3
-//! never steps above it (see [`crate::physics::solver::Solver::new`]).
+//! never steps above it (see [`RegularizedSimulator::for_solver`]).
 
 use crate::physics::engine::{Excitation, Outputs, SimError};
 use crate::physics::hermite;
-use crate::physics::params::{ParamError, Params, Support, MAX_BODIES};
-use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
+use crate::physics::params::{check_scalar, ParamError, Params, Support, MAX_BODIES, MIN_MAX_STEP};
+use crate::physics::snapshot::{check_peaks, ByteReader, ByteWriter, SnapshotError};
 use crate::physics::system::System;
 
 /// Full state: u and v of every body, then input, viscous and friction work.
@@ -60,7 +60,7 @@ pub fn stable_step(sys: &System, eps: f64) -> (f64, usize) {
 
 /// The regularized baseline integrates a structure only: a prescribed
 /// support is refused (use the exact default).
-pub fn refuse_prescribed(params: &Params) -> Result<(), ParamError> {
+fn refuse_prescribed(params: &Params) -> Result<(), ParamError> {
     if params.support == Support::Prescribed {
         return Err(ParamError {
             field: "support".into(),
@@ -123,14 +123,42 @@ impl RegularizedSimulator {
         })
     }
 
+    /// The FMU's solver 3: the step `max_step` (0: the baselines' automatic
+    /// accuracy step, [`crate::baselines::auto_step`]), never above the RK4
+    /// stability bound of the whole stack ([`stable_step`]; it is below the
+    /// bare structure's, which `auto_step` also keeps). A scene whose bound
+    /// is below the smallest allowed step is refused, naming `frictionEps`.
+    pub fn for_solver(
+        params: &Params,
+        max_step: f64,
+        friction_eps: f64,
+    ) -> Result<RegularizedSimulator, ParamError> {
+        check_scalar("frictionEps", friction_eps)?;
+        let sys = System::new(params)?;
+        refuse_prescribed(params)?;
+        let (stable, stiffest) = stable_step(&sys, friction_eps);
+        if stable < MIN_MAX_STEP {
+            let which = match stiffest {
+                0 => "the structure".to_string(),
+                j => format!("interface {j}"),
+            };
+            return Err(ParamError {
+                field: "frictionEps".into(),
+                value: friction_eps,
+                allowed: format!(
+                    "large enough for a stable step of at least {MIN_MAX_STEP:e} s: \
+                     solver 3 would need {stable:.3e} s ({which} is the stiffest, \
+                     stiffness muk N / frictionEps); raise frictionEps or use solver 1"
+                ),
+            });
+        }
+        let step = crate::baselines::auto_step(max_step, sys.omega_p).min(stable);
+        RegularizedSimulator::new(params, friction_eps, step)
+    }
+
     /// The scene.
     pub fn params(&self) -> &Params {
         &self.params
-    }
-
-    /// Internal steps over which some interface's relative velocity changed sign.
-    pub fn sign_changes(&self) -> u64 {
-        self.sign_changes
     }
 
     /// Writes the whole dynamic state (and the scene and settings).
@@ -166,7 +194,7 @@ impl RegularizedSimulator {
     fn check_restored(&self) -> Result<(), SnapshotError> {
         let n = self.sys.n;
         let stable = stable_step(&self.sys, self.eps).0;
-        if !(self.step >= crate::physics::params::MIN_MAX_STEP && self.step <= stable) {
+        if !(self.step >= MIN_MAX_STEP && self.step <= stable) {
             return Err(format!(
                 "internal step {} s of the saved state is outside [1e-7, {stable:e}] s",
                 self.step
@@ -180,12 +208,7 @@ impl RegularizedSimulator {
         if !finite || self.t < 0.0 {
             return Err("a value of the saved state is not finite, or its time is negative".into());
         }
-        let peaks = [self.peak_u0, self.peak_a0]
-            .into_iter()
-            .chain(self.peak_slip);
-        if peaks.into_iter().any(|p| p < 0.0) {
-            return Err("a peak of the saved state is negative".into());
-        }
+        check_peaks([self.peak_u0, self.peak_a0], &self.peak_slip)?;
         let beyond = (n + 1..MAX_BODIES)
             .any(|i| self.y[i] != 0.0 || self.y[MAX_BODIES + i] != 0.0 || self.peak_slip[i] != 0.0);
         if beyond || self.peak_slip[0] != 0.0 {
@@ -266,12 +289,7 @@ impl RegularizedSimulator {
     pub fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
         exc.check(self.t, t_end)?;
         let t_ref = self.t;
-        let at = |t: f64| {
-            (
-                exc.ag + exc.ag_rate * (t - t_ref),
-                exc.fext + exc.fext_rate * (t - t_ref),
-            )
-        };
+        let at = |t: f64| exc.at(t - t_ref);
         let n_steps = crate::physics::engine::substeps(t_end - t_ref, self.step) as usize;
         let h = (t_end - t_ref) / n_steps as f64;
         for i in 0..n_steps {

@@ -49,9 +49,8 @@ mod sweep;
 pub(crate) use bodies::{move_bodies, upper_cluster_step};
 use pieces::Piece;
 pub use pieces::{
-    auto_step, same_up_to_rounding, substeps, Excitation, PieceSource, Plain, ACCURATE_H_OMEGA,
-    ACCURATE_MAX_STEP, EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
-    STABLE_H_OMEGA,
+    same_up_to_rounding, substeps, Excitation, PieceSource, Plain, EVENT_TIME_TOL, FINE_H_OMEGA,
+    FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
 };
 pub use proofs::PRESCRIBED_MAX_STEP;
 pub use report::{Outputs, SimError, Stats};
@@ -69,10 +68,6 @@ pub struct Simulator {
     /// Largest internal step: the exact default's longest substep, or the
     /// step of the RK4 baseline (solver 2).
     h_max: f64,
-    /// The exact default (solver 1): substeps on the exact map where they
-    /// are proved free of switches and new peaks, the exact motion with
-    /// switches located on it elsewhere.
-    exact: bool,
     /// Stretches of the exact motion where a substep cannot be decided.
     h_fine: f64,
     /// Exact maps in use (derived data only: rebuilt identically on demand).
@@ -114,8 +109,7 @@ impl Simulator {
         let dynamics = Dynamics::new(&sys, &mode);
         let mut sim = Simulator {
             params: params.clone(),
-            h_max: auto_step(settings, sys.omega_p),
-            exact: settings.method == Method::EventLocated,
+            h_max: 0.0, // by the method, below
             // (omega_p = 0 on a prescribed support: FINE_MAX_STEP.)
             h_fine: (FINE_H_OMEGA / sys.omega_p).min(FINE_MAX_STEP),
             maps: exact_map::MapCache::default(),
@@ -142,9 +136,10 @@ impl Simulator {
             tries: 0,
             work_limit: u64::MAX,
         };
-        if sim.exact {
-            sim.h_max = sim.map_step();
-        }
+        sim.h_max = match settings.method {
+            Method::EventLocated => sim.map_step(),
+            Method::StepEnd => crate::baselines::auto_step(settings.max_step, sim.sys.omega_p),
+        };
         sim.take_reference();
         sim.resolve_mode(0);
         sim.take_reference();
@@ -158,10 +153,8 @@ impl Simulator {
     pub fn reset(&mut self) {
         let mobility = self.sys.mobility;
         *self = Simulator::new(&self.params, &self.settings).expect("validated before");
-        self.sys.mobility = mobility;
-        if mobility != 0.0 && self.sys.prescribed() {
-            self.rebuild_dynamics();
-        }
+        self.set_support_mobility(mobility)
+            .expect("validated before");
     }
 
     /// Sets the displacement and velocity of every body (relative to the
@@ -195,8 +188,7 @@ impl Simulator {
         // mode: the slips set here must have theirs already (the slips set
         // here are the reference of the resolution, the mode it gives the
         // reference from then on).
-        self.dyn_cache.clear();
-        self.dynamics = Dynamics::new(&self.sys, &self.mode);
+        self.rebuild_dynamics();
         self.take_reference();
         self.resolve_mode(0);
         self.take_reference();
@@ -205,7 +197,7 @@ impl Simulator {
         for j in 1..=n {
             self.peak_slip[j] = (self.u[j] - self.u[j - 1]).abs();
         }
-        self.peak_a0 = self.structure_accel().abs();
+        self.peak_a0 = self.dynamics.accel(0, self.load0()).abs();
     }
 
     /// Sets the support's mobility `m_b = d(floor acceleration) /
@@ -225,13 +217,6 @@ impl Simulator {
             }
         }
         Ok(())
-    }
-
-    /// The reference mode's `(M_ref, s_ref)` of a prescribed support's law
-    /// ([`mode::support_law`]): the mass stuck to the support and the load
-    /// on it in the mode in force when the inputs were last set.
-    pub fn support_reference(&self) -> (f64, f64) {
-        (self.sys.ref_mass, self.sys.ref_load)
     }
 
     /// The support's mobility ([`Simulator::set_support_mobility`]).
@@ -547,159 +532,5 @@ impl Simulator {
     fn rebuild_dynamics(&mut self) {
         self.dyn_cache.clear();
         self.dynamics = Dynamics::new(&self.sys, &self.mode);
-    }
-
-    fn structure_accel(&self) -> f64 {
-        self.dynamics.accel(0, self.load0())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn substeps_round_up_but_not_past_rounding() {
-        // Expected: ceil(length / h_max), with ratios within 1e-9 of an
-        // integer taken as that integer, and at least one step.
-        assert_eq!(substeps(0.005, 0.00125), 4.0);
-        assert_eq!(substeps(0.005 * (1.0 + 1e-12), 0.00125), 4.0);
-        assert_eq!(substeps(0.005 * (1.0 + 1e-6), 0.00125), 5.0);
-        assert_eq!(substeps(0.0049, 0.00125), 4.0);
-        assert_eq!(substeps(1e-9, 0.00125), 1.0);
-        assert_eq!(substeps(7.3, 0.01), 730.0);
-        // Beyond 2^52 every value is an integer: the same rule, by `ceil`.
-        assert_eq!(substeps(1e10, 1e-8), (1e18 * (1.0 - 1e-9f64)).ceil());
-    }
-
-    #[test]
-    fn bad_inputs_are_rejected_by_name_and_leave_the_state_alone() {
-        let mut sim = Simulator::new(&Params::default(), &Settings::default()).unwrap();
-        let nan_ag = Excitation {
-            ag: f64::NAN,
-            ..Default::default()
-        };
-        let e = sim.advance(0.01, &nan_ag).unwrap_err();
-        assert!(e.to_string().starts_with("ag = NaN"));
-        let inf_force = Excitation {
-            fext_rate: f64::INFINITY,
-            ..Default::default()
-        };
-        assert!(matches!(
-            sim.advance(0.01, &inf_force),
-            Err(SimError::BadInput {
-                name: "der(Fext)",
-                ..
-            })
-        ));
-        sim.advance(0.01, &Excitation::default()).unwrap();
-        assert!(matches!(
-            sim.advance(0.005, &Excitation::default()),
-            Err(SimError::BadTime { .. })
-        ));
-        assert_eq!(sim.time(), 0.01);
-        let bad = Settings {
-            max_step: -1.0,
-            ..Settings::default()
-        };
-        let e = Simulator::new(&Params::default(), &bad).unwrap_err();
-        assert_eq!(e.field, "maxStep");
-    }
-
-    #[test]
-    fn reset_reproduces_a_run_bit_for_bit() {
-        let mut sim = Simulator::new(&Params::default(), &Settings::default()).unwrap();
-        let exc = Excitation {
-            ag: 3.0,
-            ag_rate: -20.0,
-            ..Default::default()
-        };
-        sim.advance(0.3, &exc).unwrap();
-        let first = sim.outputs();
-        sim.reset();
-        sim.advance(0.3, &exc).unwrap();
-        assert_eq!(sim.outputs(), first);
-        assert!(first.n_events > 0);
-    }
-
-    #[test]
-    fn a_saved_state_continues_bit_for_bit() {
-        let mut sim = Simulator::new(&Params::default(), &Settings::default()).unwrap();
-        let exc = Excitation {
-            ag: 4.0,
-            ag_rate: -30.0,
-            ..Default::default()
-        };
-        sim.advance(0.2, &exc).unwrap();
-        let mut w = ByteWriter::default();
-        sim.write_state(&mut w);
-        let mut copy = Simulator::read_state(&mut ByteReader::new(&w.buf)).unwrap();
-        for s in [&mut sim, &mut copy] {
-            s.advance(
-                0.4,
-                &Excitation {
-                    ag: -2.0,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
-        }
-        assert_eq!(sim.outputs(), copy.outputs());
-        assert!(Simulator::read_state(&mut ByteReader::new(&w.buf[..40])).is_err());
-    }
-
-    #[test]
-    fn internal_step_respects_both_bounds() {
-        // The exact default: substeps of omega h = MAP_H_OMEGA, or maxStep
-        // where shorter; the RK4 baseline (solver 2): the automatic step,
-        // maxStep bounded by the stability limit STABLE_H_OMEGA / omega.
-        let p = Params::default();
-        let omega = 2.0 * std::f64::consts::PI / p.tp;
-        let auto = Simulator::new(&p, &Settings::default()).unwrap();
-        assert_eq!(auto.max_internal_step(), 0.5 / omega);
-        for (max_step, expected) in [(1e-4, 1e-4), (10.0, 0.5 / omega)] {
-            let s = Settings {
-                max_step,
-                ..Settings::default()
-            };
-            let sim = Simulator::new(&p, &s).unwrap();
-            assert_eq!(sim.max_internal_step(), expected);
-        }
-        let baseline = |max_step| Settings {
-            method: Method::StepEnd,
-            max_step,
-        };
-        let sim = Simulator::new(&p, &baseline(0.0)).unwrap();
-        assert_eq!(
-            sim.max_internal_step(),
-            (ACCURATE_H_OMEGA / omega).min(ACCURATE_MAX_STEP)
-        );
-        let sim = Simulator::new(&p, &baseline(10.0)).unwrap();
-        assert_eq!(sim.max_internal_step(), STABLE_H_OMEGA / omega);
-    }
-
-    #[test]
-    fn the_default_is_exact_at_any_max_step() {
-        // maxStep only shortens the exact default's substeps: the same
-        // motion to rounding (expected: equal within 1e-11 of the peak).
-        let exc = Excitation {
-            ag: 4.0,
-            ag_rate: -25.0,
-            fext: 300.0,
-            fext_rate: -2000.0,
-        };
-        let run = |max_step| {
-            let s = Settings {
-                max_step,
-                ..Settings::default()
-            };
-            let mut sim = Simulator::new(&Params::default(), &s).unwrap();
-            sim.advance(0.4, &exc).unwrap();
-            sim.outputs()
-        };
-        let (a, b) = (run(0.0), run(3e-4));
-        assert!(a.n_events > 0);
-        assert!((a.up - b.up).abs() < 1e-11 * a.peak_up, "{} {}", a.up, b.up);
-        assert!((a.peak_slip[0] - b.peak_slip[0]).abs() < 1e-11 * a.peak_up);
     }
 }

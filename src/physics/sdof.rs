@@ -75,33 +75,3 @@ pub fn response(omega: f64, zeta: f64, dt: f64, ag: &[f64]) -> Vec<f64> {
     }
     out
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn matches_closed_forms() {
-        // Step load p = 1 from rest: u = (1 - e^{-ζωt}(cos ωd t + ζ/√(1-ζ²) sin ωd t)) / ω².
-        let (w, z) = (3.0, 0.05);
-        let wd = w * (1.0f64 - z * z).sqrt();
-        let mut s = (0.0, 0.0);
-        let dt = 0.37;
-        for i in 1..=20 {
-            s = step(w, z, dt, s, 1.0, 1.0);
-            let t = i as f64 * dt;
-            let exact = (1.0
-                - (-z * w * t).exp()
-                    * ((wd * t).cos() + z / (1.0 - z * z).sqrt() * (wd * t).sin()))
-                / (w * w);
-            assert!((s.0 - exact).abs() < 1e-14, "step load at t = {t}");
-        }
-        // Ramp p = t on an undamped oscillator: u = (t - sin(ωt)/ω) / ω².
-        let mut s = (0.0, 0.0);
-        for i in 0..30 {
-            s = step(w, 0.0, dt, s, i as f64 * dt, (i + 1) as f64 * dt);
-        }
-        let t = 30.0 * dt;
-        assert!((s.0 - (t - (w * t).sin() / w) / (w * w)).abs() < 1e-13);
-    }
-}

@@ -44,6 +44,15 @@ pub struct ByteReader<'a> {
 /// A saved state that cannot be read.
 pub type SnapshotError = String;
 
+/// Refuses a saved state with a negative peak (a largest |value|): those of
+/// the structure's `|u0|` and `|a0|`, and of the slips (every simulator's).
+pub(crate) fn check_peaks(structure: [f64; 2], slips: &[f64]) -> Result<(), SnapshotError> {
+    if structure.iter().chain(slips).any(|&p| p < 0.0) {
+        return Err("a peak of the saved state is negative".into());
+    }
+    Ok(())
+}
+
 impl<'a> ByteReader<'a> {
     /// Reads from `bytes`.
     pub fn new(bytes: &'a [u8]) -> Self {

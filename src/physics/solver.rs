@@ -2,11 +2,10 @@
 //! scene. 1 and 2 are the exact stick/slip engine with located or step-end
 //! switching; 3 is the tanh-regularized baseline (not a recommended mode).
 
-use crate::baselines::regularized::{self, RegularizedSimulator};
-use crate::physics::engine::{self, Excitation, Outputs, PieceSource, SimError, Simulator};
-use crate::physics::params::{check_scalar, Method, ParamError, Params, Settings, MIN_MAX_STEP};
+use crate::baselines::regularized::RegularizedSimulator;
+use crate::physics::engine::{Excitation, Outputs, PieceSource, SimError, Simulator};
+use crate::physics::params::{check_scalar, Method, ParamError, Params, Settings};
 use crate::physics::snapshot::{ByteReader, ByteWriter, SnapshotError};
-use crate::physics::system::System;
 
 /// Anything that advances in time under a linear excitation piece.
 pub trait Stepper {
@@ -15,19 +14,8 @@ pub trait Stepper {
     /// Advances to `t_end` under an excitation linear over `[now, t_end]`.
     fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError>;
 
-    /// Advances through consecutive linear pieces (end time, excitation at
-    /// the piece start), as `advance` on each in turn.
-    fn advance_pieces(
-        &mut self,
-        pieces: impl Iterator<Item = (f64, Excitation)>,
-    ) -> Result<(), SimError> {
-        for (t_end, exc) in pieces {
-            self.advance(t_end, &exc)?;
-        }
-        Ok(())
-    }
-
-    /// The same from a [`PieceSource`].
+    /// Advances through the consecutive linear pieces of a [`PieceSource`]
+    /// (end time, excitation at the piece start), as `advance` on each in turn.
     fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
         while let Some((t_end, exc)) = pieces.next_piece() {
             self.advance(t_end, &exc)?;
@@ -42,12 +30,6 @@ impl Stepper for Simulator {
     }
     fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
         Simulator::advance(self, t_end, exc)
-    }
-    fn advance_pieces(
-        &mut self,
-        pieces: impl Iterator<Item = (f64, Excitation)>,
-    ) -> Result<(), SimError> {
-        Simulator::advance_pieces(self, pieces)
     }
     fn advance_source(&mut self, pieces: impl PieceSource) -> Result<(), SimError> {
         Simulator::advance_source(self, pieces)
@@ -67,21 +49,17 @@ impl Stepper for RegularizedSimulator {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SolverKind {
     /// 1: the exact engine, switches located on the exact motion (the default).
-    EventLocated,
+    EventLocated = 1,
     /// 2: RK4 switching modes at step ends only (the paper's approach; a baseline).
-    StepEnd,
+    StepEnd = 2,
     /// 3: friction regularized as `tanh(v / frictionEps)`, plain RK4.
-    Regularized,
+    Regularized = 3,
 }
 
 impl SolverKind {
     /// The FMU's integer code.
     pub fn code(self) -> i32 {
-        match self {
-            SolverKind::EventLocated => 1,
-            SolverKind::StepEnd => 2,
-            SolverKind::Regularized => 3,
-        }
+        self as i32
     }
 
     /// The kind with FMU code `code`, if any.
@@ -111,11 +89,8 @@ pub enum Solver {
 
 impl Solver {
     /// Builds the scene with the chosen method. `max_step` (s) bounds the
-    /// internal step (0 = automatic). For the regularized method it is the
-    /// fixed step (0 selects the exact engine's automatic accuracy step),
-    /// never above the RK4 stability bound of the whole stack
-    /// ([`regularized::stable_step`]); a scene whose bound is below the
-    /// smallest allowed step is refused, naming `frictionEps`.
+    /// internal step (0 = automatic); for the regularized method see
+    /// [`RegularizedSimulator::for_solver`].
     pub fn new(
         params: &Params,
         kind: SolverKind,
@@ -131,35 +106,10 @@ impl Solver {
         if kind != SolverKind::Regularized {
             return Ok(Solver::Exact(Simulator::new(params, &settings)?));
         }
-        check_scalar("frictionEps", friction_eps)?;
-        let sys = System::new(params)?;
-        regularized::refuse_prescribed(params)?;
-        let wanted = if max_step > 0.0 {
-            max_step
-        } else {
-            engine::auto_step(&Settings::default(), sys.omega_p)
-        };
-        let (stable, stiffest) = regularized::stable_step(&sys, friction_eps);
-        if stable < MIN_MAX_STEP {
-            let which = match stiffest {
-                0 => "the structure".to_string(),
-                j => format!("interface {j}"),
-            };
-            return Err(ParamError {
-                field: "frictionEps".into(),
-                value: friction_eps,
-                allowed: format!(
-                    "large enough for a stable step of at least {MIN_MAX_STEP:e} s: \
-                     solver 3 would need {stable:.3e} s ({which} is the stiffest, \
-                     stiffness muk N / frictionEps); raise frictionEps or use solver 1"
-                ),
-            });
-        }
-        let step = wanted.min(stable);
-        Ok(Solver::Regularized(RegularizedSimulator::new(
+        Ok(Solver::Regularized(RegularizedSimulator::for_solver(
             params,
+            max_step,
             friction_eps,
-            step,
         )?))
     }
 
@@ -271,58 +221,10 @@ impl Stepper for Solver {
             Solver::Regularized(s) => s.advance(t_end, exc),
         }
     }
-    fn advance_pieces(
-        &mut self,
-        pieces: impl Iterator<Item = (f64, Excitation)>,
-    ) -> Result<(), SimError> {
-        match self {
-            Solver::Exact(s) => s.advance_pieces(pieces),
-            Solver::Regularized(s) => Stepper::advance_pieces(s, pieces),
-        }
-    }
     fn advance_source(&mut self, pieces: impl PieceSource) -> Result<(), SimError> {
         match self {
             Solver::Exact(s) => s.advance_source(pieces),
             Solver::Regularized(s) => Stepper::advance_source(s, pieces),
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn codes_round_trip_and_bad_settings_are_named() {
-        for code in 1..=3 {
-            assert_eq!(SolverKind::from_code(code).unwrap().code(), code);
-        }
-        assert!(SolverKind::from_code(0).is_none());
-        let p = Params::default();
-        let e = Solver::new(&p, SolverKind::Regularized, 0.0, 0.0).unwrap_err();
-        assert_eq!(e.field, "frictionEps");
-        let e = Solver::new(&p, SolverKind::StepEnd, -1.0, 1e-3).unwrap_err();
-        assert_eq!(e.field, "maxStep");
-        // The exact engine ignores frictionEps.
-        assert!(Solver::new(&p, SolverKind::EventLocated, 0.0, 0.0).is_ok());
-    }
-
-    #[test]
-    fn a_regularized_state_round_trips_bit_for_bit() {
-        let p = Params::default();
-        let mut s = Solver::new(&p, SolverKind::Regularized, 1e-4, 1e-3).unwrap();
-        let exc = Excitation {
-            ag: 3.0,
-            ag_rate: -4.0,
-            ..Default::default()
-        };
-        s.advance(0.5, &exc).unwrap();
-        let mut w = ByteWriter::default();
-        s.write_state(&mut w);
-        let mut copy = Solver::read_state(&mut ByteReader::new(&w.buf)).unwrap();
-        s.advance(1.0, &exc).unwrap();
-        copy.advance(1.0, &exc).unwrap();
-        assert_eq!(s.outputs(), copy.outputs());
-        assert!(s.outputs().peak_slip[0] > 0.0, "the scene slips");
     }
 }

@@ -1,5 +1,5 @@
 //! The excitation over an interval, its linear pieces cut into equal
-//! substeps, and the internal step sizes.
+//! substeps, and the default's step constants.
 
 use super::*;
 
@@ -116,6 +116,7 @@ pub(super) struct Piece {
 impl Piece {
     pub(super) fn new(t_ref: f64, t_end: f64, exc: &Excitation, h_max: f64) -> Piece {
         let length = t_end - t_ref;
+        // One substep without a division: most of a record's samples.
         let (n, h) = if length > 0.0 && length <= h_max {
             (1, length)
         } else if length > 0.0 {
@@ -153,20 +154,7 @@ impl Piece {
     }
 }
 
-/// RK4 step limit for the bare structure: stability needs `h ω_p < 2.83`
-/// (undamped); we keep a margin.
-pub const STABLE_H_OMEGA: f64 = 2.5;
-/// Default accuracy bounds: `h ω_p <= 0.02` and `h <= 1.25 ms`. Measured
-/// over periods 0.1–10 s on real, synthetic and spectrum-matched records, they
-/// keep peaks within 1e-6 relative of the exact solution and the energy
-/// residual below 1e-8 of the input (docs/accuracy-speed.md, "Accuracy"). The absolute bound
-/// matters at long periods and for records rich in short periods (matched
-/// records): the structure's free response absorbs every change of slope of
-/// the forcing, and the per-step error then no longer falls with ω.
-pub const ACCURATE_H_OMEGA: f64 = 0.02;
-/// See [`ACCURATE_H_OMEGA`].
-pub const ACCURATE_MAX_STEP: f64 = 0.00125;
-/// The default method's RK4 step where the exact event path
+/// The default's fine stretches where the exact event path
 /// (`exact_events`) cannot decide a substep within its budget (a guard
 /// hovering at rounding level): `h ω_p <= 0.01` and `h <= 0.625 ms`, so
 /// that such a substep stays below 1e-9 of the peaks (docs/accuracy-speed.md, "Accuracy").
@@ -212,17 +200,5 @@ pub fn substeps(length: f64, h_max: f64) -> f64 {
         floor + 1.0
     } else {
         floor
-    }
-}
-
-/// Largest internal step for the given settings and structure. On a
-/// prescribed support (`omega_p = 0`: no spring, no stability bound) it is
-/// `maxStep`, or `ACCURATE_MAX_STEP` when automatic.
-pub fn auto_step(settings: &Settings, omega_p: f64) -> f64 {
-    let stable = STABLE_H_OMEGA / omega_p;
-    if settings.max_step > 0.0 {
-        settings.max_step.min(stable)
-    } else {
-        (ACCURATE_H_OMEGA / omega_p).min(ACCURATE_MAX_STEP)
     }
 }

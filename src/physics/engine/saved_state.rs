@@ -64,7 +64,6 @@ impl Simulator {
             };
         }
         sim.check_restored_contacts()?;
-        sim.dynamics = Dynamics::new(&sim.sys, &sim.mode);
         sim.peak_u0 = r.f64()?;
         r.f64s(&mut sim.peak_slip)?;
         let mut tail = [0.0; 4];

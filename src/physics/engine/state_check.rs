@@ -6,7 +6,7 @@
 use super::Simulator;
 use crate::physics::mode::{Contact, Mode};
 use crate::physics::params::MAX_BODIES;
-use crate::physics::snapshot::SnapshotError;
+use crate::physics::snapshot::{check_peaks, SnapshotError};
 
 impl Simulator {
     /// The contact states: free exactly where mus = 0, as a fresh scene's
@@ -60,12 +60,7 @@ impl Simulator {
                 self.last_event, self.t
             ));
         }
-        let peaks = [self.peak_u0, self.peak_a0]
-            .into_iter()
-            .chain(self.peak_slip);
-        if peaks.into_iter().any(|p| p < 0.0) {
-            return Err("a peak of the saved state is negative".into());
-        }
+        check_peaks([self.peak_u0, self.peak_a0], &self.peak_slip)?;
         let beyond = (n + 1..MAX_BODIES)
             .any(|i| self.u[i] != 0.0 || self.v[i] != 0.0 || self.e_friction[i] != 0.0)
             || self.peak_slip[n + 1..].iter().any(|&p| p != 0.0);
