@@ -65,6 +65,7 @@ impl Poly {
     }
 
     /// `sign p + offset`.
+    #[inline]
     pub(super) fn affine(&self, sign: f64, offset: f64) -> Poly {
         let mut c = self.c.map(|x| sign * x);
         c[0] += offset;
