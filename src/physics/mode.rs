@@ -576,6 +576,20 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     true
 }
 
+/// Whether mus = muk at every interface of `ifaces` (bit j): then at most
+/// one assignment is consistent.
+fn equal_friction(sys: &System, ifaces: u32) -> bool {
+    let mut rest = ifaces;
+    while rest != 0 {
+        let j = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        if sys.mus[j] != sys.muk[j] {
+            return false;
+        }
+    }
+    true
+}
+
 /// Interfaces (bit j) that carry no friction.
 fn free_mask(sys: &System) -> u32 {
     let mut m = 0;
@@ -745,40 +759,26 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
         all.tries += search.tries;
         return all;
     };
-    // Several consistent assignments (the rule decided): possible only
-    // with mus > muk; the bounded walk may have skipped the others.
-    let ambiguous = !walk.all_equal_friction()
-        && (search.count > 1 || {
-            let mut all = Search {
-                mode: req.mode,
-                best: None,
-                count: 0,
-                bound: false,
-                limit: 2,
-                tries: 0,
-            };
-            walk.search(&mut all);
-            search.tries += all.tries;
-            all.count > 1
-        });
+    // The bounded walk may have skipped other consistent assignments.
+    let (ambiguous, tries) = walk.ambiguity(search.count);
     Resolved {
         mode,
         consistent: true,
         ambiguous,
-        tries: search.tries,
+        tries: search.tries + tries,
     }
 }
 
-/// Most switches, decided without the walk where friction is equal
-/// (mus = muk) at every interface of `zero`: every interface of `zero`
+/// Most switches, decided without the walk: every interface of `zero`
 /// stuck but those of `must_break`, which slip in every combination of
 /// directions in the rule's order (at most two such interfaces). The first
 /// of these that is consistent is the walk's: no other assignment keeps as
 /// many interfaces stuck without one of `must_break` (rule 1 and 2), the
 /// stuck set, hence the kept count (rule 3) and the stuck bits, is the same
 /// for all of them, and they come in the order of their slip directions'
-/// bits (the rest of rule 4). `None`: none is consistent, or the case is
-/// not covered (the walk decides).
+/// bits (the rest of rule 4). Where some mus > muk the walk's unbounded
+/// search still decides the ambiguity. `None`: none is consistent, or the
+/// case is not covered (the walk decides).
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
     let breaking = zero & req.must_break;
@@ -793,9 +793,6 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        if sys.mus[j] != sys.muk[j] {
-            return None;
-        }
         if breaking & (1 << j) != 0 {
             slips[n_slips] = j;
             n_slips += 1;
@@ -813,15 +810,54 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             };
         }
         if consistent(sys, &mode, zero, req.load0) {
+            // (The proof before the walk: it spares building it.)
+            let (ambiguous, tries) = if equal_friction(sys, zero)
+                || n_slips == 0 && only_consistent_stick(sys, &mode, zero, req.load0)
+            {
+                (false, 0)
+            } else {
+                Walk::new(sys, req).ambiguity(1)
+            };
             return Some(Resolved {
                 mode,
                 consistent: true,
-                ambiguous: false,
-                tries: code + 1,
+                ambiguous,
+                tries: code + 1 + tries,
             });
         }
     }
     None
+}
+
+/// Whether `mode`, consistent with every interface of `zero` stuck, is the
+/// only consistent assignment: each of those sticks holds with a margin
+/// `m = muk N - |F|` away from the kinetic limit. Proof: let another
+/// consistent assignment slip the set D of them; with `W` the chain's
+/// Delassus matrix over `zero`, the two assignments' forces `f` and
+/// relative accelerations `r = W f + b` satisfy `(f' - f)' W (f' - f) =
+/// sum over D of (f'_i - f_i) r'_i`, where `|f'_i - f_i| >= m_i` and each
+/// term is at most `2 muk N_i e` (a slip is accepted down to a relative
+/// acceleration `-e`, the consistency slack times g, here ten times it for
+/// rounding). With `W >= lambda I`, `lambda = 4 / ((2n + 1)^2 M)`, `M`
+/// the blocks' mass (the heaviest body the chain can join above the one
+/// below the stack, which only adds to `W`), `lambda m_i^2 > 2 muk N_i e`
+/// at every interface contradicts it.
+fn only_consistent_stick(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
+    let blocks: f64 = sys.mass[1..sys.n + 1].iter().sum();
+    let lambda = 4.0 / ((2 * sys.n + 1).pow(2) as f64 * blocks);
+    let e = 10.0 * CONSISTENCY_TOL * sys.g;
+    let mut rest = zero;
+    while rest != 0 {
+        let j = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        let kinetic = sys.muk[j] * sys.normal[j];
+        let m = kinetic - stuck_force(sys, mode, load0, j).abs();
+        // (Written so that a NaN fails.)
+        if !(m > 0.0 && lambda * m * m > 2.0 * kinetic * e) {
+            return false;
+        }
+    }
+    true
 }
 
 /// The state of a walk: the best consistent assignment so far and how many
@@ -951,10 +987,26 @@ impl<'a> Walk<'a> {
         }
     }
 
-    fn all_equal_friction(&self) -> bool {
-        (1..self.sys.n + 1)
-            .filter(|&j| self.index[j] != usize::MAX)
-            .all(|j| self.sys.mus[j] == self.sys.muk[j])
+    /// Whether the rule chose among several consistent assignments, `found`
+    /// of them known, and the tries it took: possible only with mus > muk,
+    /// then decided by a search without the bound.
+    fn ambiguity(&self, found: u32) -> (bool, u32) {
+        if equal_friction(self.sys, self.zero_ifaces) {
+            return (false, 0);
+        }
+        if found > 1 {
+            return (true, 0);
+        }
+        let mut all = Search {
+            mode: self.req.mode,
+            best: None,
+            count: 0,
+            bound: false,
+            limit: 2,
+            tries: 0,
+        };
+        self.search(&mut all);
+        (all.count > 1, all.tries)
     }
 
     /// Walks the assignments into `search`.
