@@ -810,14 +810,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             };
         }
         if consistent(sys, &mode, zero, req.load0) {
-            // (The proof before the walk: it spares building it.)
-            let (ambiguous, tries) = if equal_friction(sys, zero)
-                || n_slips == 0 && only_consistent_stick(sys, &mode, zero, req.load0)
-            {
-                (false, 0)
-            } else {
-                Walk::new(sys, req).ambiguity(1)
-            };
+            let (ambiguous, tries) = most_stuck_ambiguity(sys, req, &mode, zero, &slips[..n_slips]);
             return Some(Resolved {
                 mode,
                 consistent: true,
@@ -829,24 +822,59 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     None
 }
 
-/// Whether `mode`, consistent with every interface of `zero` stuck, is the
-/// only consistent assignment: each of those sticks holds with a margin
-/// `m = muk N - |F|` away from the kinetic limit. Proof: let another
-/// consistent assignment slip the set D of them; with `W` the chain's
-/// Delassus matrix over `zero`, the two assignments' forces `f` and
-/// relative accelerations `r = W f + b` satisfy `(f' - f)' W (f' - f) =
-/// sum over D of (f'_i - f_i) r'_i`, where `|f'_i - f_i| >= m_i` and each
-/// term is at most `2 muk N_i e` (a slip is accepted down to a relative
-/// acceleration `-e`, the consistency slack times g, here ten times it for
-/// rounding). With `W >= lambda I`, `lambda = 4 / ((2n + 1)^2 M)`, `M`
-/// the blocks' mass (the heaviest body the chain can join above the one
-/// below the stack, which only adds to `W`), `lambda m_i^2 > 2 muk N_i e`
-/// at every interface contradicts it.
-fn only_consistent_stick(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
-    let blocks: f64 = sys.mass[1..sys.n + 1].iter().sum();
-    let lambda = 4.0 / ((2 * sys.n + 1).pow(2) as f64 * blocks);
-    let e = 10.0 * CONSISTENCY_TOL * sys.g;
-    let mut rest = zero;
+/// The ambiguity of [`resolve_most_stuck`]'s `mode` (every interface of
+/// `zero` stuck but `slips`) and its tries: by a proof before the walk's
+/// search (it spares building the walk). One interface `b` slipping:
+/// another consistent assignment either sticks `b`, and then it is `mode`
+/// with `b` stuck (checked) or, by [`away_from_kinetic`] on that one, none;
+/// or slips `b` the same way, none by [`away_from_kinetic`] on `mode`
+/// (`b`'s force is the same); or reverses it (its force changes by `2 muk
+/// N`, its term is at most `4 muk N e`), none where `lambda muk N > e`.
+fn most_stuck_ambiguity(
+    sys: &System,
+    req: &ResolveRequest,
+    mode: &Mode,
+    zero: u32,
+    slips: &[usize],
+) -> (bool, u32) {
+    if equal_friction(sys, zero) {
+        return (false, 0);
+    }
+    let held = slips.iter().fold(zero, |m, &j| m & !(1 << j));
+    match *slips {
+        [] if away_from_kinetic(sys, mode, held, req.load0) => return (false, 0),
+        [b] => {
+            let mut stuck = *mode;
+            stuck.contact[b] = Contact::Stuck;
+            if consistent(sys, &stuck, zero, req.load0) {
+                return (true, 1);
+            }
+            let (lambda, e) = proof_scales(sys);
+            if lambda * sys.muk[b] * sys.normal[b] > e
+                && away_from_kinetic(sys, mode, held, req.load0)
+                && away_from_kinetic(sys, &stuck, held, req.load0)
+            {
+                return (false, 1);
+            }
+        }
+        _ => {}
+    }
+    Walk::new(sys, req).ambiguity(1)
+}
+
+/// Whether no consistent assignment differs from `mode` by slipping some of
+/// its sticks `held` (the other contacts the same): each holds with a
+/// margin `m = muk N - |F|` away from the kinetic limit. Proof: let one
+/// slip the set D of them; with `W` the chain's Delassus matrix, the two
+/// assignments' forces `f` and relative accelerations `r = W f + b`
+/// satisfy `(f' - f)' W (f' - f) = sum over D of (f'_i - f_i) r'_i`, where
+/// `|f'_i - f_i| >= m_i` and each term is at most `2 muk N_i e` (a slip is
+/// accepted down to a relative acceleration `-e`). With `W >= lambda I`
+/// ([`proof_scales`]), `lambda m_i^2 > 2 muk N_i e` at every one of them
+/// contradicts it. (`mode` need not be consistent.)
+fn away_from_kinetic(sys: &System, mode: &Mode, held: u32, load0: f64) -> bool {
+    let (lambda, e) = proof_scales(sys);
+    let mut rest = held;
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
@@ -858,6 +886,18 @@ fn only_consistent_stick(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bo
         }
     }
     true
+}
+
+/// The scales of the proofs of uniqueness: `lambda = 4 / ((2n + 1)^2 M)`,
+/// `M` the blocks' mass, at most the least eigenvalue of the chain's
+/// Delassus matrix over any interfaces (that of the bodies the chain can
+/// join, the one below the stack left out: it only adds to `W`); and `e`,
+/// ten times the consistency slack of a slip's relative acceleration (for
+/// rounding).
+fn proof_scales(sys: &System) -> (f64, f64) {
+    let blocks: f64 = sys.mass[1..sys.n + 1].iter().sum();
+    let lambda = 4.0 / ((2 * sys.n + 1).pow(2) as f64 * blocks);
+    (lambda, 10.0 * CONSISTENCY_TOL * sys.g)
 }
 
 /// The state of a walk: the best consistent assignment so far and how many
