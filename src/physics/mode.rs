@@ -551,7 +551,9 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
 /// decided cluster by cluster with the same [`cluster_law`], skipping the
 /// clusters that decide nothing (no interface of `zero` at their bottom,
 /// inside, or at their top, where the cluster above needs their
-/// acceleration) and stopping at the first that breaks the law.
+/// acceleration) and stopping at the first that breaks the law. (Inline:
+/// the fast path's every switch runs it.)
+#[inline(always)]
 fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     let (mut bottom, mut accel_below) = (0, 0.0);
     // (Half-open ranges in the resolution: an inclusive range's iterator
@@ -788,11 +790,14 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let mut mode = req.mode;
     let mut slips = [0usize; 2];
     let mut n_slips = 0;
-    // One pass over the interfaces of `zero`, from the bottom.
+    // One pass over the interfaces of `zero`, from the bottom (and whether
+    // mus = muk at all of them: then no other assignment is consistent).
+    let mut equal = true;
     let mut rest = zero;
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
+        equal &= sys.mus[j] == sys.muk[j];
         if breaking & (1 << j) != 0 {
             slips[n_slips] = j;
             n_slips += 1;
@@ -810,7 +815,11 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             };
         }
         if consistent(sys, &mode, zero, req.load0) {
-            let (ambiguous, tries) = most_stuck_ambiguity(sys, req, &mode, zero, &slips[..n_slips]);
+            let (ambiguous, tries) = if equal {
+                (false, 0)
+            } else {
+                most_stuck_ambiguity(sys, req, &mode, zero, &slips[..n_slips])
+            };
             return Some(Resolved {
                 mode,
                 consistent: true,
@@ -830,6 +839,8 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 /// or slips `b` the same way, none by [`away_from_kinetic`] on `mode`
 /// (`b`'s force is the same); or reverses it (its force changes by `2 muk
 /// N`, its term is at most `4 muk N e`), none where `lambda muk N > e`.
+/// (Out of line: where mus > muk only.)
+#[inline(never)]
 fn most_stuck_ambiguity(
     sys: &System,
     req: &ResolveRequest,
@@ -837,9 +848,6 @@ fn most_stuck_ambiguity(
     zero: u32,
     slips: &[usize],
 ) -> (bool, u32) {
-    if equal_friction(sys, zero) {
-        return (false, 0);
-    }
     let held = slips.iter().fold(zero, |m, &j| m & !(1 << j));
     match *slips {
         [] if away_from_kinetic(sys, mode, held, req.load0) => return (false, 0),
