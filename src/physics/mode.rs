@@ -551,8 +551,7 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
 /// decided cluster by cluster with the same [`cluster_law`], skipping the
 /// clusters that decide nothing (no interface of `zero` at their bottom,
 /// inside, or at their top, where the cluster above needs their
-/// acceleration) and stopping at the first that breaks the law. (Inline:
-/// the fast path's every switch runs it.)
+/// acceleration) and stopping at the first that breaks the law.
 #[inline(always)]
 fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     let (mut bottom, mut accel_below) = (0, 0.0);
@@ -574,20 +573,6 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
             accel_below = accel;
         }
         bottom = end;
-    }
-    true
-}
-
-/// Whether mus = muk at every interface of `ifaces` (bit j): then at most
-/// one assignment is consistent.
-fn equal_friction(sys: &System, ifaces: u32) -> bool {
-    let mut rest = ifaces;
-    while rest != 0 {
-        let j = rest.trailing_zeros() as usize;
-        rest &= rest - 1;
-        if sys.mus[j] != sys.muk[j] {
-            return false;
-        }
     }
     true
 }
@@ -761,13 +746,27 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
         all.tries += search.tries;
         return all;
     };
-    // The bounded walk may have skipped other consistent assignments.
-    let (ambiguous, tries) = walk.ambiguity(search.count);
+    // Several consistent assignments (the rule decided): possible only
+    // with mus > muk; the bounded walk may have skipped the others.
+    let ambiguous = !walk.all_equal_friction()
+        && (search.count > 1 || {
+            let mut all = Search {
+                mode: req.mode,
+                best: None,
+                count: 0,
+                bound: false,
+                limit: 2,
+                tries: 0,
+            };
+            walk.search(&mut all);
+            search.tries += all.tries;
+            all.count > 1
+        });
     Resolved {
         mode,
         consistent: true,
         ambiguous,
-        tries: search.tries + tries,
+        tries: search.tries,
     }
 }
 
@@ -778,9 +777,8 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
 /// many interfaces stuck without one of `must_break` (rule 1 and 2), the
 /// stuck set, hence the kept count (rule 3) and the stuck bits, is the same
 /// for all of them, and they come in the order of their slip directions'
-/// bits (the rest of rule 4). Where some mus > muk the walk's unbounded
-/// search still decides the ambiguity. `None`: none is consistent, or the
-/// case is not covered (the walk decides).
+/// bits (the rest of rule 4), and its [`ambiguity`]. `None`: none is
+/// consistent, or the case is not covered (the walk decides).
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
     let breaking = zero & req.must_break;
@@ -790,10 +788,8 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let mut mode = req.mode;
     let mut slips = [0usize; 2];
     let mut n_slips = 0;
-    // One pass over the interfaces of `zero`, from the bottom (and whether
-    // mus = muk at all of them: then no other assignment is consistent).
-    let mut equal = true;
-    let mut rest = zero;
+    // One pass over the interfaces of `zero`, from the bottom.
+    let (mut rest, mut equal) = (zero, true);
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
@@ -815,11 +811,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             };
         }
         if consistent(sys, &mode, zero, req.load0) {
-            let (ambiguous, tries) = if equal {
-                (false, 0)
-            } else {
-                most_stuck_ambiguity(sys, req, &mode, zero, &slips[..n_slips])
-            };
+            let (ambiguous, tries) = ambiguity(equal, sys, req, &mode);
             return Some(Resolved {
                 mode,
                 consistent: true,
@@ -831,81 +823,45 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     None
 }
 
-/// The ambiguity of [`resolve_most_stuck`]'s `mode` (every interface of
-/// `zero` stuck but `slips`) and its tries: by a proof before the walk's
-/// search (it spares building the walk). One interface `b` slipping:
-/// another consistent assignment either sticks `b`, and then it is `mode`
-/// with `b` stuck (checked) or, by [`away_from_kinetic`] on that one, none;
-/// or slips `b` the same way, none by [`away_from_kinetic`] on `mode`
-/// (`b`'s force is the same); or reverses it (its force changes by `2 muk
-/// N`, its term is at most `4 muk N e`), none where `lambda muk N > e`.
-/// (Out of line: where mus > muk only.)
-#[inline(never)]
-fn most_stuck_ambiguity(
-    sys: &System,
-    req: &ResolveRequest,
-    mode: &Mode,
-    zero: u32,
-    slips: &[usize],
-) -> (bool, u32) {
-    let held = slips.iter().fold(zero, |m, &j| m & !(1 << j));
-    match *slips {
-        [] if away_from_kinetic(sys, mode, held, req.load0) => return (false, 0),
-        [b] => {
-            let mut stuck = *mode;
-            stuck.contact[b] = Contact::Stuck;
-            if consistent(sys, &stuck, zero, req.load0) {
-                return (true, 1);
+/// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none
+/// where mus = muk or [`away_from_kinetic`] covers every rival (with one
+/// slip: all but `mode` with it stuck, checked), else the walk's.
+fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
+    let zero = req.zero & !free_mask(sys);
+    let (slips, mut stuck) = (zero & req.must_break, *mode);
+    let proved = equal
+        || match slips.count_ones() {
+            0 => away_from_kinetic(sys, mode, zero, req.load0),
+            1 => {
+                stuck.contact[slips.trailing_zeros() as usize] = Contact::Stuck;
+                if consistent(sys, &stuck, zero, req.load0) {
+                    return (true, 1);
+                }
+                away_from_kinetic(sys, mode, zero, req.load0)
+                    && away_from_kinetic(sys, &stuck, zero & !slips, req.load0)
             }
-            let (lambda, e) = proof_scales(sys);
-            if lambda * sys.muk[b] * sys.normal[b] > e
-                && away_from_kinetic(sys, mode, held, req.load0)
-                && away_from_kinetic(sys, &stuck, held, req.load0)
-            {
-                return (false, 1);
-            }
-        }
-        _ => {}
-    }
-    Walk::new(sys, req).ambiguity(1)
+            _ => false,
+        };
+    (!proved)
+        .then(|| resolve_by_walk(sys, req))
+        .map_or((false, 0), |r| (r.ambiguous, r.tries))
 }
 
-/// Whether no consistent assignment differs from `mode` by slipping some of
-/// its sticks `held` (the other contacts the same): each holds with a
-/// margin `m = muk N - |F|` away from the kinetic limit. Proof: let one
-/// slip the set D of them; with `W` the chain's Delassus matrix, the two
-/// assignments' forces `f` and relative accelerations `r = W f + b`
-/// satisfy `(f' - f)' W (f' - f) = sum over D of (f'_i - f_i) r'_i`, where
-/// `|f'_i - f_i| >= m_i` and each term is at most `2 muk N_i e` (a slip is
-/// accepted down to a relative acceleration `-e`). With `W >= lambda I`
-/// ([`proof_scales`]), `lambda m_i^2 > 2 muk N_i e` at every one of them
-/// contradicts it. (`mode` need not be consistent.)
-fn away_from_kinetic(sys: &System, mode: &Mode, held: u32, load0: f64) -> bool {
-    let (lambda, e) = proof_scales(sys);
-    let mut rest = held;
-    while rest != 0 {
-        let j = rest.trailing_zeros() as usize;
-        rest &= rest - 1;
+/// Whether no consistent assignment differs from `mode` at `ifaces` (by
+/// slipped sticks, reversed slips): `lambda |f' - f|^2 <= (f' - f)'(r' - r)`
+/// (Delassus matrix `>= lambda I`) sums at most `2 muk N e` per stick, `4 muk
+/// N e` per slip (`e`: 10x the slip slack), `|f'_i - f_i| >= muk N - |F_i|`, `2 muk N`.
+fn away_from_kinetic(sys: &System, mode: &Mode, ifaces: u32, load0: f64) -> bool {
+    let lambda = 4.0 / ((2 * sys.n + 1).pow(2) as f64 * sys.mass[1..=sys.n].iter().sum::<f64>());
+    let e = 10.0 * CONSISTENCY_TOL * sys.g;
+    (1..sys.n + 1).filter(|&j| ifaces & (1 << j) != 0).all(|j| {
         let kinetic = sys.muk[j] * sys.normal[j];
-        let m = kinetic - stuck_force(sys, mode, load0, j).abs();
-        // (Written so that a NaN fails.)
-        if !(m > 0.0 && lambda * m * m > 2.0 * kinetic * e) {
-            return false;
-        }
-    }
-    true
-}
-
-/// The scales of the proofs of uniqueness: `lambda = 4 / ((2n + 1)^2 M)`,
-/// `M` the blocks' mass, at most the least eigenvalue of the chain's
-/// Delassus matrix over any interfaces (that of the bodies the chain can
-/// join, the one below the stack left out: it only adds to `W`); and `e`,
-/// ten times the consistency slack of a slip's relative acceleration (for
-/// rounding).
-fn proof_scales(sys: &System) -> (f64, f64) {
-    let blocks: f64 = sys.mass[1..sys.n + 1].iter().sum();
-    let lambda = 4.0 / ((2 * sys.n + 1).pow(2) as f64 * blocks);
-    (lambda, 10.0 * CONSISTENCY_TOL * sys.g)
+        let (m, term) = match mode.is_stuck(j) {
+            true => (kinetic - stuck_force(sys, mode, load0, j).abs(), 2.0),
+            false => (2.0 * kinetic, 4.0),
+        };
+        m > 0.0 && lambda * m * m > term * kinetic * e // (a NaN fails)
+    })
 }
 
 /// The state of a walk: the best consistent assignment so far and how many
@@ -1035,26 +991,10 @@ impl<'a> Walk<'a> {
         }
     }
 
-    /// Whether the rule chose among several consistent assignments, `found`
-    /// of them known, and the tries it took: possible only with mus > muk,
-    /// then decided by a search without the bound.
-    fn ambiguity(&self, found: u32) -> (bool, u32) {
-        if equal_friction(self.sys, self.zero_ifaces) {
-            return (false, 0);
-        }
-        if found > 1 {
-            return (true, 0);
-        }
-        let mut all = Search {
-            mode: self.req.mode,
-            best: None,
-            count: 0,
-            bound: false,
-            limit: 2,
-            tries: 0,
-        };
-        self.search(&mut all);
-        (all.count > 1, all.tries)
+    fn all_equal_friction(&self) -> bool {
+        (1..self.sys.n + 1)
+            .filter(|&j| self.index[j] != usize::MAX)
+            .all(|j| self.sys.mus[j] == self.sys.muk[j])
     }
 
     /// Walks the assignments into `search`.
