@@ -823,16 +823,16 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     None
 }
 
-/// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none
-/// where mus = muk or [`away_from_kinetic`] covers every rival (with one
-/// slip: all but `mode` with it stuck, checked), else the walk's.
+/// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
+/// [`away_from_kinetic`] covers every rival (one slip: all but `mode` with it stuck, checked;
+/// a free interface in `zero` fails it), else the walk's.
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
-    let zero = req.zero & !free_mask(sys);
-    let (slips, mut stuck) = (zero & req.must_break, *mode);
+    let (zero, slips) = (req.zero, req.zero & req.must_break);
     let proved = equal
         || match slips.count_ones() {
             0 => away_from_kinetic(sys, mode, zero, req.load0),
             1 => {
+                let mut stuck = *mode;
                 stuck.contact[slips.trailing_zeros() as usize] = Contact::Stuck;
                 if consistent(sys, &stuck, zero, req.load0) {
                     return (true, 1);
