@@ -552,6 +552,7 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
 /// clusters that decide nothing (no interface of `zero` at their bottom,
 /// inside, or at their top, where the cluster above needs their
 /// acceleration) and stopping at the first that breaks the law.
+#[inline(always)]
 fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     let (mut bottom, mut accel_below) = (0, 0.0);
     // (Half-open ranges in the resolution: an inclusive range's iterator
@@ -769,16 +770,15 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     }
 }
 
-/// Most switches, decided without the walk where friction is equal
-/// (mus = muk) at every interface of `zero`: every interface of `zero`
+/// Most switches, decided without the walk: every interface of `zero`
 /// stuck but those of `must_break`, which slip in every combination of
 /// directions in the rule's order (at most two such interfaces). The first
 /// of these that is consistent is the walk's: no other assignment keeps as
 /// many interfaces stuck without one of `must_break` (rule 1 and 2), the
 /// stuck set, hence the kept count (rule 3) and the stuck bits, is the same
 /// for all of them, and they come in the order of their slip directions'
-/// bits (the rest of rule 4). `None`: none is consistent, or the case is
-/// not covered (the walk decides).
+/// bits (the rest of rule 4), and its [`ambiguity`]. `None`: none is
+/// consistent, or the case is not covered (the walk decides).
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
     let breaking = zero & req.must_break;
@@ -789,13 +789,11 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let mut slips = [0usize; 2];
     let mut n_slips = 0;
     // One pass over the interfaces of `zero`, from the bottom.
-    let mut rest = zero;
+    let (mut rest, mut equal) = (zero, true);
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        if sys.mus[j] != sys.muk[j] {
-            return None;
-        }
+        equal &= sys.mus[j] == sys.muk[j];
         if breaking & (1 << j) != 0 {
             slips[n_slips] = j;
             n_slips += 1;
@@ -813,15 +811,57 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             };
         }
         if consistent(sys, &mode, zero, req.load0) {
+            let (ambiguous, tries) = ambiguity(equal, sys, req, &mode);
             return Some(Resolved {
                 mode,
                 consistent: true,
-                ambiguous: false,
-                tries: code + 1,
+                ambiguous,
+                tries: code + 1 + tries,
             });
         }
     }
     None
+}
+
+/// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
+/// [`away_from_kinetic`] covers every rival (one slip: all but `mode` with it stuck, checked;
+/// a free interface in `zero` fails it), else the walk's.
+fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
+    let (zero, slips) = (req.zero, req.zero & req.must_break);
+    let proved = equal
+        || match slips.count_ones() {
+            0 => away_from_kinetic(sys, mode, zero, req.load0),
+            1 => {
+                let mut stuck = *mode;
+                stuck.contact[slips.trailing_zeros() as usize] = Contact::Stuck;
+                if consistent(sys, &stuck, zero, req.load0) {
+                    return (true, 1);
+                }
+                away_from_kinetic(sys, mode, zero, req.load0)
+                    && away_from_kinetic(sys, &stuck, zero & !slips, req.load0)
+            }
+            _ => false,
+        };
+    (!proved)
+        .then(|| resolve_by_walk(sys, req))
+        .map_or((false, 0), |r| (r.ambiguous, r.tries))
+}
+
+/// Whether no consistent assignment differs from `mode` at `ifaces` (by
+/// slipped sticks, reversed slips): `lambda |f' - f|^2 <= (f' - f)'(r' - r)`
+/// (Delassus matrix `>= lambda I`) sums at most `2 muk N e` per stick, `4 muk
+/// N e` per slip (`e`: 10x the slip slack), `|f'_i - f_i| >= muk N - |F_i|`, `2 muk N`.
+fn away_from_kinetic(sys: &System, mode: &Mode, ifaces: u32, load0: f64) -> bool {
+    let lambda = 4.0 / ((2 * sys.n + 1).pow(2) as f64 * sys.mass[1..=sys.n].iter().sum::<f64>());
+    let e = 10.0 * CONSISTENCY_TOL * sys.g;
+    (1..sys.n + 1).filter(|&j| ifaces & (1 << j) != 0).all(|j| {
+        let kinetic = sys.muk[j] * sys.normal[j];
+        let (m, term) = match mode.is_stuck(j) {
+            true => (kinetic - stuck_force(sys, mode, load0, j).abs(), 2.0),
+            false => (2.0 * kinetic, 4.0),
+        };
+        m > 0.0 && lambda * m * m > term * kinetic * e // (a NaN fails)
+    })
 }
 
 /// The state of a walk: the best consistent assignment so far and how many
