@@ -249,9 +249,11 @@ impl RecordPieces<'_> {
         let (time, dt, stop) = (self.time, self.dt, self.stop);
         let uniform = |t0: f64, t1: f64| same_up_to_rounding(t1 - t0, dt, t1);
         let mut j = k;
-        // Eight at a time, each eight checked whole (no branch per sample).
-        while j + 8 <= stop {
-            let (t0, t1) = (&time[j - 1..j + 7], &time[j..j + 8]);
+        // Eight at a time, each eight checked whole (no branch per sample,
+        // and no bounds checks: the chunks of the times from `k - 1` and
+        // from `k`).
+        let t = &time[k - 1..stop];
+        for (t0, t1) in t.chunks_exact(8).zip(t[1..].chunks_exact(8)) {
             if !t0
                 .iter()
                 .zip(t1)
