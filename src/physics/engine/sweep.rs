@@ -268,11 +268,11 @@ impl Simulator {
                     // finite. Its first substep follows at once (the last
                     // piece had one at least).
                     debug_assert!(cur.n >= 1);
-                    // (`cur.exc` is set by `end_lean`.)
                     (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
+                    (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
                     (inp.ag, inp.ag_rate) = (ag, ag_rate);
                 } else {
-                    cur = end_lean(cur, pieces, lean[0], &inp);
+                    pieces.skip(lean[0]);
                     lean = [0, 0];
                     let Some((t_end, exc)) = pieces.next_piece() else {
                         break;
@@ -409,7 +409,8 @@ impl Simulator {
             taken += 1;
         }
 
-        *piece = end_lean(cur, pieces, lean[0], &inp);
+        pieces.skip(lean[0]);
+        *piece = cur;
         if taken > 0 {
             sums.add_work(&rows, mass, load_accel, &mut work);
             // Input work on the upper clusters over the run, exact: with
@@ -460,20 +461,6 @@ impl Simulator {
         }
         pending
     }
-}
-
-/// Moves `pieces` past the `taken` promised pieces, the last of them (if
-/// any) `cur`: its values, which the loop keeps in `inp` only (as they are
-/// at its start, before its first substep; else again from `pieces`).
-#[inline(always)]
-fn end_lean(mut cur: Piece, pieces: &mut impl PieceSource, taken: usize, inp: &Inputs) -> Piece {
-    if taken > 0 && cur.i == 1 {
-        (cur.exc.ag, cur.exc.ag_rate) = (inp.ag, inp.ag_rate);
-    } else if taken > 0 {
-        (_, cur.exc.ag, cur.exc.ag_rate) = pieces.continuing(taken - 1).unwrap();
-    }
-    pieces.skip(taken);
-    cur
 }
 
 /// The rows of a substep of length `h` on `z = [u, v, p, p']`: the map's
