@@ -1,5 +1,5 @@
 //! The frontier bench's ratio for a few scenes (quicker than the bench):
-//! `cargo run --release --example ratio -- n8 n2 percall` (ROUNDS, REPS).
+//! `cargo run --release --example ratio -- n8 n2 percall onecall` (ROUNDS, REPS).
 #[path = "../tests/common/mod.rs"]
 #[allow(dead_code, unused_imports)]
 mod common;
@@ -49,6 +49,12 @@ fn main() {
                     }
                     black_box(sim.outputs().peak_up);
                 }
+                "onecall" => {
+                    let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+                    sim.advance_pieces((0..gm.time.len() - 1).map(piece))
+                        .unwrap();
+                    black_box(sim.outputs().peak_up);
+                }
                 "floor" => {
                     let omega = 2.0 * std::f64::consts::PI / p.tp;
                     black_box(sdof::response(omega, p.zeta, 0.005, black_box(&gm.accel)));
@@ -59,8 +65,9 @@ fn main() {
                     black_box(sim.outputs().peak_up);
                 }
             };
-            // percall against the record path; the others against the floor.
-            let other = if scene == "percall" {
+            // percall and onecall against the record path; the others
+            // against the floor.
+            let other = if scene == "percall" || scene == "onecall" {
                 "record"
             } else {
                 "floor"
