@@ -191,11 +191,10 @@ impl Flow {
                     let g0 = sign * (sim.v[d.bottom[hi]] - self.v.c[0]);
                     return g0 > upper_spread(hi) + self.v_spread;
                 }
-                // Linear: positive at both ends, or starting at zero and
-                // growing (a slip just started), as `first_zero` finds it.
+                // Linear over the stretch (its rate per stretch).
                 let g0 = sign * (sim.v[d.bottom[hi]] - sim.v[d.bottom[lo]]);
                 let rate = sign * (upper_rate(hi) - upper_rate(lo));
-                (g0 > 0.0 || (g0 == 0.0 && rate > 0.0)) && g0 + rate > 0.0
+                super::proofs::linear_guard_lasts(g0, rate) > 1.0
             }
             Guard::Stuck {
                 mass_above,

@@ -56,6 +56,22 @@ fn cubic_below(peak: f64, [y0, d0, y1, d1]: [f64; 4], h: f64, rest: f64) -> bool
     hermite::max_abs(y0, d0, y1, d1, h) + rest <= peak
 }
 
+/// How long a guard linear in time, `g0 + rate t` (`t` in the rate's
+/// unit), stays positive from its start: `INFINITY` where it never falls,
+/// `0` where it is not positive just after the start (at zero it must
+/// grow). A guard between two clusters above the structure's is linear:
+/// their absolute accelerations are constant in a mode.
+#[inline(always)]
+pub(super) fn linear_guard_lasts(g0: f64, rate: f64) -> f64 {
+    if g0 >= 0.0 && rate >= 0.0 && g0 + rate > 0.0 {
+        f64::INFINITY
+    } else if g0 > 0.0 && rate < 0.0 {
+        g0 / -rate
+    } else {
+        0.0
+    }
+}
+
 /// Whether the absolute acceleration stays inside the stick band `[lo, hi]`
 /// over a substep of length `h`: its ends `a0`, `a1`, `sup|A''| <= s3`, and
 /// (only when that does not decide) its rates at the ends, `jerks()`.

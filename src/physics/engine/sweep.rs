@@ -25,7 +25,10 @@
 use super::exact_events::raise_substep_peaks;
 use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
-use super::proofs::{in_band_proved, raise_peak_proved, slip_guard_proved, structure_peaks_proved};
+use super::proofs::{
+    in_band_proved, linear_guard_lasts, raise_peak_proved, slip_guard_proved,
+    structure_peaks_proved,
+};
 use super::{move_bodies, Excitation, Piece, PieceSource, Simulator};
 use crate::physics::hermite;
 use crate::physics::params::MAX_BODIES;
@@ -228,14 +231,7 @@ impl Simulator {
             let sign = slip_sign[m];
             let g0 = sign * (vel_start[m + 1] - vel_start[m]);
             let rate = sign * (accel_c[m + 1] - accel_c[m]);
-            let lim = if g0 >= 0.0 && rate >= 0.0 && g0 + rate > 0.0 {
-                f64::INFINITY
-            } else if g0 > 0.0 && rate < 0.0 {
-                g0 / -rate * (1.0 - 4.0 * f64::EPSILON)
-            } else {
-                0.0
-            };
-            tau_lim = tau_lim.min(lim);
+            tau_lim = tau_lim.min(linear_guard_lasts(g0, rate) * (1.0 - 4.0 * f64::EPSILON));
         }
         // The structure's slip's peak where its interface is free (no guard:
         // raised substep by substep).
