@@ -94,19 +94,17 @@ fn errors(p: &Params, gm: &GroundMotion) -> (f64, f64) {
 /// through the record path, timed alternately: `[per call, in one call,
 /// record]`.
 fn timed_inputs(p: &Params, gm: &GroundMotion, rounds: usize, reps: usize) -> [f64; 3] {
-    let piece = |k: usize| common::record_piece(gm, k);
+    let pieces = common::record_pieces(gm);
     let per_call = || {
         let mut sim = Simulator::new(p, &Settings::default()).unwrap();
-        for k in 0..gm.time.len() - 1 {
-            let (t1, exc) = piece(k);
-            sim.advance(t1, &exc).unwrap();
+        for (t1, exc) in &pieces {
+            sim.advance(*t1, exc).unwrap();
         }
         sim.outputs().peak_up
     };
     let one_call = || {
         let mut sim = Simulator::new(p, &Settings::default()).unwrap();
-        sim.advance_pieces((0..gm.time.len() - 1).map(piece))
-            .unwrap();
+        sim.advance_pieces(pieces.iter().copied()).unwrap();
         sim.outputs().peak_up
     };
     let record = || simulate(black_box(p), gm).outputs().peak_up;

@@ -31,7 +31,7 @@ fn main() {
         "n8s" => common::graded_stack_static_above_kinetic(),
         _ => common::graded_stack(8),
     };
-    let piece = |k: usize| common::record_piece(&gm, k);
+    let pieces = common::record_pieces(&gm);
     let mut events = 0;
     for _ in 0..reps {
         match scene {
@@ -41,9 +41,8 @@ fn main() {
             }
             "percall" => {
                 let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
-                for k in 0..gm.time.len() - 1 {
-                    let (t1, exc) = piece(k);
-                    sim.advance(t1, &exc).unwrap();
+                for (t1, exc) in &pieces {
+                    sim.advance(*t1, exc).unwrap();
                 }
                 events = sim.stats().events;
                 if std::env::var("OUT").is_ok() {
@@ -53,8 +52,7 @@ fn main() {
             }
             "onecall" => {
                 let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
-                sim.advance_pieces((0..gm.time.len() - 1).map(piece))
-                    .unwrap();
+                sim.advance_pieces(pieces.iter().copied()).unwrap();
                 events = sim.stats().events;
                 black_box(sim.outputs());
             }

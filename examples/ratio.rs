@@ -39,20 +39,18 @@ fn main() {
                 "n8" => common::graded_stack(8),
                 _ => common::graded_stack(2),
             };
-            let piece = |k: usize| common::record_piece(&gm, k);
+            let pieces = common::record_pieces(&gm);
             let run = |way: &str| match way {
                 "percall" => {
                     let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
-                    for k in 0..gm.time.len() - 1 {
-                        let (t1, exc) = piece(k);
-                        sim.advance(t1, &exc).unwrap();
+                    for (t1, exc) in &pieces {
+                        sim.advance(*t1, exc).unwrap();
                     }
                     black_box(sim.outputs().peak_up);
                 }
                 "onecall" => {
                     let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
-                    sim.advance_pieces((0..gm.time.len() - 1).map(piece))
-                        .unwrap();
+                    sim.advance_pieces(pieces.iter().copied()).unwrap();
                     black_box(sim.outputs().peak_up);
                 }
                 "floor" => {

@@ -890,6 +890,16 @@ pub fn record_piece(
     (t1, exc)
 }
 
+/// All of `gm`'s samples as [`record_piece`]s, built before a benchmark
+/// times the engine on them (a master computes the slopes it passes).
+pub fn record_pieces(
+    gm: &stacked_live_load::GroundMotion,
+) -> Vec<(f64, stacked_live_load::Excitation)> {
+    (0..gm.time.len() - 1)
+        .map(|k| record_piece(gm, k))
+        .collect()
+}
+
 /// The benchmarks' stacks (`benches/frontier.rs`, `examples/scaling.rs`):
 /// the paper's two blocks (`Params::default`), and above them lighter, less
 /// rough blocks, friction falling upwards but never equal to the one below
