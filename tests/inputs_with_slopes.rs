@@ -357,3 +357,233 @@ fn the_fmu_with_a_record_and_inputs_with_derivatives_matches_the_exact_reference
         assert!(stacked_live_load::fmi::instance::Instance::deserialize(&bytes).is_ok());
     }
 }
+
+/// Pieces of a record's shape (equal lengths, `ag` continuous, `Fext`
+/// held), broken now and then as a master may break them: a length that
+/// changes, a jump of `Fext`, a ramp of `Fext`, a jump of `ag`, a length
+/// equal up to the rounding of the times. A prescribed support gets no
+/// `Fext`.
+fn record_like_inputs(rng: &mut Rng, p: &Params, duration: f64) -> Vec<InputPiece> {
+    let force_scale = if p.support == Support::Prescribed {
+        0.0
+    } else {
+        p.mp * 4.0
+    };
+    let (mut t, mut ag, mut fext) = (0.0, 0.0, 0.3 * force_scale);
+    let mut h = rng.uniform(0.004, 0.02);
+    let mut pieces = vec![];
+    while t < duration {
+        let fext_rate = match rng.next_f64() {
+            x if x < 0.03 => {
+                h = rng.uniform(0.004, 0.02);
+                0.0
+            }
+            x if x < 0.06 => {
+                fext = rng.uniform(-1.0, 1.0) * force_scale;
+                0.0
+            }
+            x if x < 0.09 => rng.uniform(-40.0, 40.0) * force_scale,
+            x if x < 0.15 => {
+                ag = rng.uniform(-6.0, 6.0);
+                0.0
+            }
+            _ => 0.0,
+        };
+        // The next sample of a random walk, within the box.
+        let ag_next = (ag + rng.uniform(-1.0, 1.0)).clamp(-6.0, 6.0);
+        // Times as a sum (their rounding), lengths as the last.
+        let t_end = t + h;
+        pieces.push(InputPiece {
+            t_end,
+            ag,
+            ag_rate: (ag_next - ag) / h,
+            fext,
+            fext_rate,
+        });
+        (t, ag, fext) = (t_end, ag_next, fext + fext_rate * h);
+    }
+    pieces
+}
+
+#[test]
+fn pieces_in_one_call_match_the_exact_reference_where_their_shape_breaks() {
+    // `Simulator::advance_pieces` promises each next piece of a record's
+    // shape and checks the promise as it takes it; a piece that breaks it
+    // goes through the driver's full checks. Random scenes of 0 to 8
+    // blocks, on a structure and on a prescribed support, against the
+    // exact reference (1e-9, as above) and against one `advance` per piece
+    // (every piece checked in full: the same to 1e-10 of the peaks).
+    let mut rng = Rng(0x0ca1_15ee);
+    let mut switches = 0;
+    for case in 0..18 {
+        // A prescribed support carries 1 to 8 blocks.
+        let n_blocks = if case < 9 { case } else { 1 + case % 8 };
+        let mut p = random_scene(&mut rng, n_blocks);
+        if case >= 9 {
+            p.support = Support::Prescribed;
+            p.mp = 1.0;
+            for j in 0..n_blocks {
+                p.alpha[j] = rng.uniform(0.5, 300.0);
+            }
+        }
+        let pieces = record_like_inputs(&mut rng, &p, 2.0);
+        let label = format!("case {case} ({n_blocks} blocks, {:?})", p.support);
+        let mut one_call = Simulator::new(&p, &Settings::default()).unwrap();
+        one_call
+            .advance_pieces(pieces.iter().map(|q| (q.t_end, excitation(q))))
+            .unwrap();
+        let exact = Exact::new(&p).run_pieces(0.0, &pieces, 16);
+        if case < 9 {
+            compare(&one_call, &exact, &label);
+        } else {
+            // A support pinned to `ag` (u0 = 0): the blocks' peaks, and
+            // their state to the largest displacement (as
+            // tests/prescribed_support.rs).
+            let o = one_call.outputs();
+            let scale_u = exact.u.iter().fold(1e-6f64, |m, x| m.max(x.abs()));
+            for j in 0..n_blocks {
+                let slip = rel_slip(o.peak_slip[j], exact.peak_slip[j]);
+                let state = (o.ub[j] - exact.u[j + 1]).abs() / scale_u;
+                assert!(slip < 1e-9 && state < 1e-9, "{label}: {slip:e} {state:e}");
+            }
+        }
+        let each = drive(&p, &pieces, &label);
+        let (a, b) = (one_call.outputs(), each.outputs());
+        let scale = b
+            .peak_up
+            .max(b.peak_slip.iter().fold(1e-9, |m, x| m.max(*x)));
+        let worst = (0..n_blocks).fold((a.peak_up - b.peak_up).abs(), |m, j| {
+            m.max((a.peak_slip[j] - b.peak_slip[j]).abs())
+        });
+        assert!(
+            worst <= 1e-10 * scale && a.t == b.t,
+            "{label}: one call against one per piece: {worst:e} of {scale:e}"
+        );
+        switches += exact.events;
+    }
+    assert!(switches > 100, "only {switches} switches in 18 scenes");
+}
+
+#[test]
+fn a_bad_piece_in_one_call_stops_it_where_one_call_per_piece_stops() {
+    // A NaN `ag` (then an infinite slope, then time going back) deep in a
+    // run of promised pieces: the call fails with the piece's variable
+    // named, at the end of the last good piece, as one `advance` per piece.
+    let mut rng = Rng(0x0bad_91ec);
+    let p = random_scene(&mut rng, 3);
+    let good = record_like_inputs(&mut rng, &p, 1.0);
+    let k = good.len() / 2;
+    for (bad, name) in [
+        (
+            InputPiece {
+                ag: f64::NAN,
+                ..good[k]
+            },
+            "ag",
+        ),
+        (
+            InputPiece {
+                ag_rate: f64::INFINITY,
+                ..good[k]
+            },
+            "der(ag)",
+        ),
+        (
+            InputPiece {
+                t_end: good[k - 1].t_end - 0.001,
+                ..good[k]
+            },
+            "",
+        ),
+    ] {
+        let mut pieces = good.clone();
+        pieces[k] = bad;
+        let mut one_call = Simulator::new(&p, &Settings::default()).unwrap();
+        let err = one_call
+            .advance_pieces(pieces.iter().map(|q| (q.t_end, excitation(q))))
+            .unwrap_err();
+        match (&err, name) {
+            (SimError::BadInput { name: got, .. }, want) => assert_eq!(*got, want),
+            (SimError::BadTime { .. }, "") => {}
+            _ => panic!("piece {k} ({name}): {err}"),
+        }
+        let mut each = Simulator::new(&p, &Settings::default()).unwrap();
+        for q in &pieces[..k] {
+            each.advance(q.t_end, &excitation(q)).unwrap();
+        }
+        let (a, b) = (one_call.outputs(), each.outputs());
+        assert_eq!(a.t, b.t, "{name}: stopped at {} instead of {}", a.t, b.t);
+        assert!((a.up - b.up).abs() <= 1e-10 * b.peak_up.max(1e-9), "{name}");
+    }
+}
+
+#[test]
+fn checked_pieces_promise_only_pieces_of_a_records_shape() {
+    // `CheckedPieces` (the source of `advance_pieces`) gives through
+    // `continuing` only a piece as long as the last one given by
+    // `next_piece` (up to the rounding of the times), with `Fext` held at
+    // its value and zero rate, every value finite and, where asked, `ag`
+    // without a jump; any other piece waits for `next_piece` (expected:
+    // exactly the breaks built in below).
+    use stacked_live_load::physics::engine::{CheckedPieces, PieceSource};
+    let piece = |t_end: f64, ag: f64, ag_rate: f64, fext: f64, fext_rate: f64| {
+        let exc = Excitation {
+            ag,
+            ag_rate,
+            fext,
+            fext_rate,
+        };
+        (t_end, exc)
+    };
+    // A record's shape from t = 0 at 0.01 s: ag 1, 2, 3, ... (slope 100).
+    let shape = |k: usize| piece(0.01 * (k + 1) as f64, (k + 1) as f64, 100.0, 5.0, 0.0);
+    let cases: Vec<(&str, (f64, Excitation), bool)> = vec![
+        ("same shape", shape(2), true),
+        (
+            "rounding of the times",
+            (shape(2).0 * (1.0 + 2e-16), shape(2).1),
+            true,
+        ),
+        ("longer", (0.0305, shape(2).1), false),
+        ("Fext jumps", piece(0.03, 3.0, 100.0, 6.0, 0.0), false),
+        ("Fext ramps", piece(0.03, 3.0, 100.0, 5.0, 1.0), false),
+        ("ag NaN", piece(0.03, f64::NAN, 100.0, 5.0, 0.0), false),
+        (
+            "slope infinite",
+            piece(0.03, 3.0, f64::INFINITY, 5.0, 0.0),
+            false,
+        ),
+        ("t_end NaN", piece(f64::NAN, 3.0, 100.0, 5.0, 0.0), false),
+    ];
+    for ag_continuous in [false, true] {
+        let mut all = cases.clone();
+        all.push((
+            "ag jumps",
+            piece(0.03, 3.5, 100.0, 5.0, 0.0),
+            !ag_continuous,
+        ));
+        for (what, next, promised) in all {
+            let pieces = vec![shape(0), shape(1), next, shape(3)];
+            let mut source = CheckedPieces::new(pieces.into_iter(), ag_continuous);
+            assert_eq!(source.next_piece(), Some(shape(0)));
+            // No promise before the source knows a piece's length.
+            assert_eq!(source.promised(), 0, "{what}");
+            assert_eq!(source.next_piece(), Some(shape(1)));
+            assert!(source.promised() > 0, "{what}");
+            let (t_end, exc) = next;
+            match source.continuing(0) {
+                Some(given) => {
+                    assert!(promised, "{what}: promised");
+                    assert_eq!(given, (t_end, exc.ag, exc.ag_rate), "{what}");
+                    source.skip(1);
+                }
+                None => {
+                    assert!(!promised, "{what}: not promised");
+                    source.skip(0);
+                    let waiting = source.next_piece().unwrap();
+                    assert!(waiting.0.to_bits() == t_end.to_bits(), "{what}: waits");
+                }
+            }
+        }
+    }
+}

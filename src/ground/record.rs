@@ -329,7 +329,7 @@ impl PieceSource for RecordPieces<'_> {
 
     #[inline(always)]
     #[allow(clippy::eq_op)] // `sum - sum`: the finiteness test below
-    fn continuing(&self, k: usize) -> Option<(f64, f64, f64)> {
+    fn continuing(&mut self, k: usize) -> Option<(f64, f64, f64)> {
         // A whole sample interval from its first sample, ending at or
         // before `t_end` (the usual case), as long as the last (looked
         // for once, `uniform_from`): its slope by the product (the

@@ -49,8 +49,8 @@ mod sweep;
 pub(crate) use bodies::{move_bodies, upper_cluster_step};
 use pieces::Piece;
 pub use pieces::{
-    same_up_to_rounding, substeps, Excitation, PieceSource, Plain, EVENT_TIME_TOL, FINE_H_OMEGA,
-    FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
+    same_up_to_rounding, substeps, CheckedPieces, Excitation, PieceSource, Plain, EVENT_TIME_TOL,
+    FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
 };
 pub use proofs::PRESCRIBED_MAX_STEP;
 pub use report::{Outputs, SimError, Stats};
@@ -323,7 +323,7 @@ impl Simulator {
     /// Advances to `t_end` under an excitation that is linear over
     /// `[now, t_end]` (values given at the current time).
     pub fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
-        self.advance_pieces(std::iter::once((t_end, *exc)))
+        self.advance_source(Plain(std::iter::once((t_end, *exc))))
     }
 
     /// Advances through consecutive linear pieces, each given by its end
@@ -334,7 +334,8 @@ impl Simulator {
         &mut self,
         pieces: impl IntoIterator<Item = (f64, Excitation)>,
     ) -> Result<(), SimError> {
-        self.advance_source(Plain(pieces.into_iter()))
+        let ag_continuous = self.sys.prescribed();
+        self.advance_source(CheckedPieces::new(pieces.into_iter(), ag_continuous))
     }
 
     /// [`Simulator::advance_pieces`] from a [`PieceSource`] (a record's

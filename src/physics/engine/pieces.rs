@@ -67,37 +67,123 @@ pub trait PieceSource {
     /// How many of the next pieces the source may promise to continue the
     /// one it gave last, as a record's next samples do (each as long as
     /// the last up to the rounding of the times, 1e-15 relative, `Fext`
-    /// constant): the driver takes them with [`PieceSource::continuing`],
-    /// keeping its substeps without checking them again, and then moves
-    /// past them with [`PieceSource::skip`]. Lean methods of their own,
-    /// so that the common piece is built in registers, its place counted
-    /// by the driver.
+    /// held with a zero rate, every value finite): the driver takes them
+    /// with [`PieceSource::continuing`], keeping its substeps without
+    /// checking them again, and then tells the source with
+    /// [`PieceSource::skip`]. Lean methods of their own, so that the common
+    /// piece is built in registers, its place counted by the driver.
     #[inline(always)]
     fn promised(&self) -> usize {
         0
     }
 
-    /// Promised piece `k` (`k < promised()`), without moving on: its end,
-    /// `ag` and `ag_rate` (`Fext` and its zero rate stay as they were), if
-    /// it keeps the promise (every value finite too); `None` takes nothing
-    /// (the driver skips the pieces taken and asks `next_piece`).
+    /// Promised piece `k` (`k < promised()`): its end, `ag` and `ag_rate`
+    /// (`Fext` and its zero rate stay as they were), if it keeps the
+    /// promise; `None` takes nothing (the driver calls `skip` with the
+    /// pieces taken and asks `next_piece`). A source may move on as it
+    /// gives a piece, or leave that to `skip`.
     #[inline(always)]
-    fn continuing(&self, _k: usize) -> Option<(f64, f64, f64)> {
+    fn continuing(&mut self, _k: usize) -> Option<(f64, f64, f64)> {
         None
     }
 
-    /// Moves past the first `k` promised pieces (the driver took them).
+    /// The driver took the first `k` promised pieces.
     #[inline(always)]
     fn skip(&mut self, _k: usize) {}
 }
 
-/// An iterator of pieces as a [`PieceSource`] that promises nothing.
+/// An iterator of pieces as a [`PieceSource`] that promises nothing (one
+/// piece: `Simulator::advance`).
 pub struct Plain<I>(pub I);
 
 impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for Plain<I> {
     #[inline(always)]
     fn next_piece(&mut self) -> Option<(f64, Excitation)> {
         self.0.next()
+    }
+}
+
+/// An iterator of pieces as a [`PieceSource`] that promises each next
+/// piece and checks the promise as it gives it (the checks a record makes
+/// once for a stretch of samples): a piece that breaks it waits for
+/// `next_piece`, which the driver checks in full.
+pub struct CheckedPieces<I> {
+    pieces: I,
+    waiting: Option<(f64, Excitation)>,
+    /// A jump of `ag` breaks the promise (it moves a prescribed support).
+    ag_continuous: bool,
+    /// The end of the last piece given, the length of the last given by
+    /// `next_piece` (NaN before the second: no promise), `Fext` if held
+    /// (NaN if not: no promise) and `ag` at that end.
+    end: f64,
+    length: f64,
+    fext: f64,
+    ag_end: f64,
+}
+
+impl<I> CheckedPieces<I> {
+    /// The pieces of `pieces`, the first to be checked in full; with
+    /// `ag_continuous` a jump of `ag` breaks the promise.
+    pub fn new(pieces: I, ag_continuous: bool) -> CheckedPieces<I> {
+        CheckedPieces {
+            pieces,
+            waiting: None,
+            ag_continuous,
+            end: f64::NAN,
+            length: f64::NAN,
+            fext: f64::NAN,
+            ag_end: f64::NAN,
+        }
+    }
+}
+
+impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for CheckedPieces<I> {
+    #[inline(always)]
+    fn next_piece(&mut self) -> Option<(f64, Excitation)> {
+        let (t_end, exc) = self.waiting.take().or_else(|| self.pieces.next())?;
+        let length = t_end - self.end;
+        self.length = length;
+        self.end = t_end;
+        self.fext = if exc.fext_rate == 0.0 {
+            exc.fext
+        } else {
+            f64::NAN
+        };
+        self.ag_end = exc.ag + exc.ag_rate * length;
+        Some((t_end, exc))
+    }
+
+    #[inline(always)]
+    fn promised(&self) -> usize {
+        if self.length > 0.0 && !self.fext.is_nan() {
+            usize::MAX
+        } else {
+            0
+        }
+    }
+
+    #[inline(always)]
+    #[allow(clippy::eq_op)] // `sum - sum`: a finiteness test
+    fn continuing(&mut self, _k: usize) -> Option<(f64, f64, f64)> {
+        let (t_end, exc) = self.pieces.next()?;
+        // As long as the last up to rounding, Fext held, every value finite
+        // (`x - x` is 0 where `x` is finite), and where it matters `ag`
+        // without a jump.
+        let sum = exc.ag + exc.ag_rate + t_end;
+        if exc.fext == self.fext
+            && exc.fext_rate == 0.0
+            && sum - sum == 0.0
+            && same_up_to_rounding(t_end - self.end, self.length, t_end)
+            && !(self.ag_continuous && is_jump(exc.ag, self.ag_end))
+        {
+            if self.ag_continuous {
+                self.ag_end = exc.ag + exc.ag_rate * (t_end - self.end);
+            }
+            self.end = t_end;
+            return Some((t_end, exc.ag, exc.ag_rate));
+        }
+        self.waiting = Some((t_end, exc));
+        None
     }
 }
 
