@@ -193,7 +193,7 @@ pub(crate) fn running_peak(peak: f64, x: f64, x1: f64, x2: f64, slack: f64) -> [
 /// M0` with `load = Fext - k u0 - c v0` on a structure, `ag` on a prescribed
 /// support (StackOnFloor: `up`, `vp` and the structure's outputs are 0
 /// there), whose derivatives follow from the state and the inputs
-/// ([`structure_accel`]; the inputs are linear over a step). `floorForce =
+/// (`structure_accel`; the inputs are linear over a step). `floorForce =
 /// slidingForce - attachedMass A0` follows body 0's cluster while
 /// interface 1 is stuck (else `attachedMass = 0`); `attachedMass` and
 /// `slidingForce` are constant in a mode.

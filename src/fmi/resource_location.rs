@@ -41,7 +41,7 @@ impl Style {
 /// Longest location quoted in a message (characters).
 const MAX_SHOWN: usize = 200;
 
-/// The location as a message shows it: at most [`MAX_SHOWN`] characters,
+/// The location as a message shows it: at most `MAX_SHOWN` (200) characters,
 /// invalid UTF-8 and control characters shown as `?`.
 pub fn shown(location: &[u8]) -> String {
     let text = String::from_utf8_lossy(location);
