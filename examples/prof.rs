@@ -1,7 +1,7 @@
 //! One scene of the frontier bench, REPS times (for callgrind: take
 //! (REPS=3 - REPS=1) / 2 to remove the set-up).
 //! `cargo run --release --example prof -- SCENE RECORD` with SCENE one of
-//! n0 n2 n8 n8s percall onecall floor, RECORD shipped | b1 | b2.
+//! n0 n2 n8 n8s percall onecall floor, RECORD shipped | b1 | b2 | a path.
 #[path = "../tests/common/mod.rs"]
 #[allow(dead_code, unused_imports)]
 mod common;
@@ -23,7 +23,12 @@ fn main() {
             common::truncate(&gm, 20.0)
         }
         "b1" => common::broadband_record(&mut common::Rng(0xb0ad1e), 20.0, 0.005),
-        _ => common::broadband_record(&mut common::Rng(0xf1e1d5e), 20.0, 0.005),
+        "b2" => common::broadband_record(&mut common::Rng(0xf1e1d5e), 20.0, 0.005),
+        // Any other record: a path, its first 20 s.
+        path => common::truncate(
+            &stacked_live_load::GroundMotion::read(path.as_ref(), 9.81).unwrap(),
+            20.0,
+        ),
     };
     let p = match scene {
         "n0" => common::graded_stack(0),
@@ -37,7 +42,12 @@ fn main() {
         match scene {
             "floor" => {
                 let omega = 2.0 * std::f64::consts::PI / p.tp;
-                black_box(sdof::response(omega, p.zeta, 0.005, black_box(&gm.accel)));
+                black_box(sdof::response(
+                    omega,
+                    p.zeta,
+                    gm.time[1] - gm.time[0],
+                    black_box(&gm.accel),
+                ));
             }
             "percall" => {
                 let mut sim = Simulator::new(&p, &Settings::default()).unwrap();

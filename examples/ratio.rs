@@ -1,5 +1,6 @@
 //! The frontier bench's ratio for a few scenes (quicker than the bench):
-//! `cargo run --release --example ratio -- n8 n2 percall onecall` (ROUNDS, REPS).
+//! `cargo run --release --example ratio -- n8 n2 percall onecall` (ROUNDS, REPS;
+//! RECORDS=path:path other records, their first 20 s).
 #[path = "../tests/common/mod.rs"]
 #[allow(dead_code, unused_imports)]
 mod common;
@@ -15,22 +16,35 @@ fn main() {
         .ok()
         .map_or(20, |s| s.parse().unwrap());
     let scenes: Vec<String> = std::env::args().skip(1).collect();
-    let shipped = stacked_live_load::GroundMotion::read(
-        &common::shared_record("RSN787_LOMAP_SLC270.AT2"),
-        9.81,
-    )
-    .unwrap();
-    let records = [
-        ("shipped", common::truncate(&shipped, 20.0)),
-        (
-            "b1",
-            common::broadband_record(&mut common::Rng(0xb0ad1e), 20.0, 0.005),
-        ),
-        (
-            "b2",
-            common::broadband_record(&mut common::Rng(0xf1e1d5e), 20.0, 0.005),
-        ),
-    ];
+    let read = |path: &std::path::Path| {
+        let gm = stacked_live_load::GroundMotion::read(path, 9.81).unwrap();
+        common::truncate(&gm, 20.0)
+    };
+    // RECORDS=path:path... other records (their first 20 s) instead.
+    let records: Vec<(String, stacked_live_load::GroundMotion)> = match std::env::var("RECORDS") {
+        Ok(paths) => paths
+            .split(':')
+            .map(|p| {
+                let path = std::path::Path::new(p);
+                let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+                (name, read(path))
+            })
+            .collect(),
+        Err(_) => vec![
+            (
+                "shipped".into(),
+                read(&common::shared_record("RSN787_LOMAP_SLC270.AT2")),
+            ),
+            (
+                "b1".into(),
+                common::broadband_record(&mut common::Rng(0xb0ad1e), 20.0, 0.005),
+            ),
+            (
+                "b2".into(),
+                common::broadband_record(&mut common::Rng(0xf1e1d5e), 20.0, 0.005),
+            ),
+        ],
+    };
     for (name, gm) in &records {
         for scene in &scenes {
             let p = match scene.as_str() {
@@ -55,7 +69,12 @@ fn main() {
                 }
                 "floor" => {
                     let omega = 2.0 * std::f64::consts::PI / p.tp;
-                    black_box(sdof::response(omega, p.zeta, 0.005, black_box(&gm.accel)));
+                    black_box(sdof::response(
+                        omega,
+                        p.zeta,
+                        gm.time[1] - gm.time[0],
+                        black_box(&gm.accel),
+                    ));
                 }
                 _ => {
                     let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
