@@ -26,7 +26,7 @@ use super::exact_events::raise_substep_peaks;
 use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
 use super::proofs::{
-    in_band_proved, linear_guard_lasts, raise_peak_proved, slip_guard_proved,
+    energy_run, in_band_proved, linear_guard_lasts, raise_peak_proved, slip_guard_proved,
     structure_peaks_proved,
 };
 use super::{move_bodies, Excitation, Piece, PieceSource, Simulator};
@@ -244,6 +244,8 @@ impl Simulator {
         let mut t0 = self.t;
         let mut inp = Inputs::at(&cur, t0);
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
+        // A failed try of an energy run (below) waits `COOL` substeps.
+        let (mut wait, cool) = (0, 8);
         let mut taken = 0u64;
         let mut pending = None;
         // The pieces the source promised to continue the last: `lean[0]`
@@ -306,6 +308,48 @@ impl Simulator {
                         fext_rate: exc.fext_rate,
                     };
                     continue;
+                }
+            }
+            // The structure's cluster alone: the substeps its energy proves
+            // (`proofs::energy_run`) through the pieces the source promised
+            // (Fext constant), each paying its `∫|p|` (trapezoid, with a
+            // margin for its rounding) from the budget.
+            if NC == 1 && !AG && lean[0] < lean[1] && inp.fext_rate == 0.0 {
+                if wait > 0 {
+                    wait -= 1;
+                } else {
+                    let cf = load_accel + rule.accel(inp.ag, inp.fext);
+                    let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
+                    let band = has_band.then_some((band_lo, band_hi));
+                    let [mut budget, slack] =
+                        energy_run(map, [u0, vel[0]], cf, [peak_u0, peak_a0], band);
+                    let before = taken;
+                    loop {
+                        if cur.i > cur.n
+                            && !continue_piece(pieces, &mut cur, &mut inp, &mut lean, t0)
+                        {
+                            break;
+                        }
+                        let hs = cur.h;
+                        let z = [u0, vel[0], cf - inp.ag, rate_m - inp.ag_rate];
+                        let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
+                        if !(cost + slack <= budget) {
+                            break;
+                        }
+                        budget -= cost + slack;
+                        t0 = if cur.i == cur.n { cur.t_end } else { t0 + hs };
+                        (u0, vel[0]) = (dot(&row_u, &z), dot(&row_v, &z));
+                        sums.add(&z);
+                        inp.ag += inp.ag_rate * hs;
+                        cur.i += 1;
+                        taken += 1;
+                    }
+                    if taken == before {
+                        wait = cool;
+                    } else {
+                        a_abs = cf - w2 * u0 - cm * vel[0];
+                        continue;
+                    }
                 }
             }
             // Every substep of a piece is `cur.h` long; the last ends at the
@@ -457,6 +501,32 @@ impl Simulator {
         }
         pending
     }
+}
+
+/// Moves `cur` on to the next piece the source promised to continue it (a
+/// record's next sample, as long, Fext constant, every value finite), from
+/// `t0`: false where there is none.
+#[inline(always)]
+fn continue_piece(
+    pieces: &impl PieceSource,
+    cur: &mut Piece,
+    inp: &mut Inputs,
+    lean: &mut [usize; 2],
+    t0: f64,
+) -> bool {
+    let next = if lean[0] < lean[1] {
+        pieces.continuing(lean[0])
+    } else {
+        None
+    };
+    let Some((t_end, ag, ag_rate)) = next else {
+        return false;
+    };
+    lean[0] += 1;
+    (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
+    (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
+    (inp.ag, inp.ag_rate) = (ag, ag_rate);
+    true
 }
 
 /// The rows of a substep of length `h` on `z = [u, v, p, p']`: the map's
