@@ -254,21 +254,8 @@ impl Simulator {
 
         loop {
             if cur.i > cur.n {
-                let next = if lean[0] < lean[1] {
-                    pieces.continuing(lean[0])
-                } else {
-                    None
-                };
-                if let Some((t_end, ag, ag_rate)) = next {
-                    lean[0] += 1;
-                    // The source's promise: a record's next sample, as long
-                    // as the last, Fext constant (as it is), every value
-                    // finite. Its first substep follows at once (the last
-                    // piece had one at least).
-                    debug_assert!(cur.n >= 1);
-                    (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
-                    (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
-                    (inp.ag, inp.ag_rate) = (ag, ag_rate);
+                if continue_piece(pieces, &mut cur, &mut inp, &mut lean, t0) {
+                    // Its first substep follows at once.
                 } else {
                     pieces.skip(lean[0]);
                     lean = [0, 0];
@@ -320,9 +307,8 @@ impl Simulator {
                 } else {
                     let cf = load_accel + rule.accel(inp.ag, inp.fext);
                     let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
-                    let band = has_band.then_some((band_lo, band_hi));
                     let [mut budget, slack] =
-                        energy_run(map, [u0, vel[0]], cf, [peak_u0, peak_a0], band);
+                        energy_run(map, [u0, vel[0]], cf, [peak_u0, peak_a0], d.stick_band);
                     let before = taken;
                     loop {
                         if cur.i > cur.n
@@ -341,15 +327,13 @@ impl Simulator {
                         (u0, vel[0]) = (dot(&row_u, &z), dot(&row_v, &z));
                         sums.add(&z);
                         inp.ag += inp.ag_rate * hs;
-                        cur.i += 1;
-                        taken += 1;
+                        (cur.i, taken) = (cur.i + 1, taken + 1);
                     }
-                    if taken == before {
-                        wait = cool;
-                    } else {
+                    if taken > before {
                         a_abs = cf - w2 * u0 - cm * vel[0];
                         continue;
                     }
+                    wait = cool;
                 }
             }
             // Every substep of a piece is `cur.h` long; the last ends at the
@@ -503,9 +487,9 @@ impl Simulator {
     }
 }
 
-/// Moves `cur` on to the next piece the source promised to continue it (a
-/// record's next sample, as long, Fext constant, every value finite), from
-/// `t0`: false where there is none.
+/// Moves `cur` from `t0` on to the next piece the source promised to
+/// continue it (a record's next sample, as long as the last, Fext constant
+/// as it is, every value finite): false where there is none.
 #[inline(always)]
 fn continue_piece(
     pieces: &impl PieceSource,
@@ -523,6 +507,7 @@ fn continue_piece(
         return false;
     };
     lean[0] += 1;
+    debug_assert!(cur.n >= 1);
     (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
     (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
     (inp.ag, inp.ag_rate) = (ag, ag_rate);
