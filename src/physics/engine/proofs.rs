@@ -168,10 +168,11 @@ pub(super) fn structure_peaks_proved(
 /// v - cm v² <= |p| r`: `r` grows by `∫|p|` at most (the trapezoid bounds
 /// it, `|p|` convex on a substep), and `|u| <= r/ω`, `|A - cf| <= r
 /// sqrt(w2 + cm²)` must stay under the peaks and inside the stick `band`.
-/// Margins (1e-9, 1e-12 a substep) cover the states' rounding.
+/// Margins (1e-9, 1e-12 a substep) cover the states' rounding. `[w2, ω,
+/// 1/sqrt(w2 + cm²)]`: the mode's.
 #[inline(never)]
 pub(super) fn energy_run(
-    map: &ExactMap,
+    [w2, omega, inv_gain]: [f64; 3],
     [u, v]: [f64; 2],
     cf: f64,
     [peak_u, peak_a]: [f64; 2],
@@ -179,9 +180,8 @@ pub(super) fn energy_run(
 ) -> [f64; 2] {
     let (lo, hi) = band.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
     let a_room = (peak_a - cf.abs()).min(hi - cf).min(cf - lo);
-    let gain = (map.w2 + map.cm * map.cm).sqrt();
-    let lim = (map.w2.sqrt() * peak_u).min(a_room / gain) * (1.0 - 1e-9);
-    let r = (v * v + map.w2 * (u * u)).sqrt();
+    let lim = (omega * peak_u).min(a_room * inv_gain) * (1.0 - 1e-9);
+    let r = (v * v + w2 * (u * u)).sqrt();
     [lim - r * (1.0 + 1e-9), 1e-12 * lim.abs()]
 }
 

@@ -208,6 +208,8 @@ impl Simulator {
         let terms = |h: f64| [0.5 * h * h, h].map(|k| accel_c.map(|a| k * a));
         let [mut half_h2a, mut ha] = terms(cur.h);
         let (mut w2, mut cm) = (map.w2, map.cm);
+        // For the energy runs (w2 and cm are the mode's, whatever the map).
+        let rates = [w2, w2.sqrt(), 1.0 / (w2 + cm * cm).sqrt()];
 
         // The run's state.
         let mut u0 = self.u[0];
@@ -308,7 +310,7 @@ impl Simulator {
                     let cf = load_accel + rule.accel(inp.ag, inp.fext);
                     let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
                     let [mut budget, slack] =
-                        energy_run(map, [u0, vel[0]], cf, [peak_u0, peak_a0], d.stick_band);
+                        energy_run(rates, [u0, vel[0]], cf, [peak_u0, peak_a0], d.stick_band);
                     let before = taken;
                     loop {
                         if cur.i > cur.n
