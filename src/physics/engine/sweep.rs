@@ -246,7 +246,7 @@ impl Simulator {
         let mut t0 = self.t;
         let mut inp = Inputs::at(&cur, t0);
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
-        // A failed try of an energy run (below) waits `COOL` substeps.
+        // Substeps to wait after a failed try of an energy run (below).
         let (mut wait, cool) = (0, 8);
         let mut taken = 0u64;
         let mut pending = None;
@@ -500,12 +500,10 @@ fn continue_piece(
     lean: &mut [usize; 2],
     t0: f64,
 ) -> bool {
-    let next = if lean[0] < lean[1] {
-        pieces.continuing(lean[0])
-    } else {
-        None
-    };
-    let Some((t_end, ag, ag_rate)) = next else {
+    if lean[0] >= lean[1] {
+        return false;
+    }
+    let Some((t_end, ag, ag_rate)) = pieces.continuing(lean[0]) else {
         return false;
     };
     lean[0] += 1;
