@@ -161,26 +161,22 @@ pub(super) fn structure_peaks_proved(
     [u_proved, a_proved]
 }
 
-/// A run of substeps of the structure's cluster alone (on a structure, its
-/// forcing `p = cf - ag` per unit mass, `cf` constant) proved at once free
-/// of switches and new peaks: `[budget, slack]`, each substep paying `h
-/// (|p(0)| + |p(h)|)/2 + slack`. With `r = sqrt(v² + w2 u²)`, `(r²/2)' = p
-/// v - cm v² <= |p| r`: `r` grows by `∫|p|` at most (the trapezoid bounds
-/// it, `|p|` convex on a substep), and `|u| <= r/ω`, `|A - cf| <= r
-/// sqrt(w2 + cm²)` must stay under the peaks and inside the stick `band`.
+/// A run of substeps of the bare structure (its forcing `p = cf - ag` per
+/// unit mass, `cf` constant) proved at once free of new peaks: `[budget,
+/// slack]`, each substep paying `h (|p(0)| + |p(h)|)/2 + slack`. With `r =
+/// sqrt(v² + w2 u²)`, `(r²/2)' = p v - cm v² <= |p| r`: `r` grows by `∫|p|`
+/// at most (the trapezoid bounds it, `|p|` convex on a substep), and `|u|
+/// <= r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the peaks.
 /// Margins (1e-9, 1e-12 a substep) cover the states' rounding. `[w2, ω,
-/// 1/sqrt(w2 + cm²)]`: the mode's.
+/// 1/sqrt(w2 + cm²)]`: the structure's.
 #[inline(never)]
 pub(super) fn energy_run(
     [w2, omega, inv_gain]: [f64; 3],
     [u, v]: [f64; 2],
     cf: f64,
     [peak_u, peak_a]: [f64; 2],
-    band: Option<(f64, f64)>,
 ) -> [f64; 2] {
-    let (lo, hi) = band.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-    let a_room = (peak_a - cf.abs()).min(hi - cf).min(cf - lo);
-    let lim = (omega * peak_u).min(a_room * inv_gain) * (1.0 - 1e-9);
+    let lim = (omega * peak_u).min((peak_a - cf.abs()) * inv_gain) * (1.0 - 1e-9);
     let r = (v * v + w2 * (u * u)).sqrt();
     [lim - r * (1.0 + 1e-9), 1e-12 * lim.abs()]
 }

@@ -144,15 +144,19 @@ impl Simulator {
         pieces: &mut impl PieceSource,
     ) -> Option<(f64, Excitation)> {
         match self.dynamics.n_clusters {
-            1 => self.sweep_clusters::<1, AG>(piece, pieces),
-            2 => self.sweep_clusters::<2, AG>(piece, pieces),
-            3 => self.sweep_clusters::<3, AG>(piece, pieces),
-            4 => self.sweep_clusters::<4, AG>(piece, pieces),
-            5 => self.sweep_clusters::<5, AG>(piece, pieces),
-            6 => self.sweep_clusters::<6, AG>(piece, pieces),
-            7 => self.sweep_clusters::<7, AG>(piece, pieces),
-            8 => self.sweep_clusters::<8, AG>(piece, pieces),
-            _ => self.sweep_clusters::<MAX_BODIES, AG>(piece, pieces),
+            // The bare structure's cluster (no band): its energy runs.
+            1 if !AG && self.dynamics.stick_band.is_none() => {
+                self.sweep_clusters::<1, AG, true>(piece, pieces)
+            }
+            1 => self.sweep_clusters::<1, AG, false>(piece, pieces),
+            2 => self.sweep_clusters::<2, AG, false>(piece, pieces),
+            3 => self.sweep_clusters::<3, AG, false>(piece, pieces),
+            4 => self.sweep_clusters::<4, AG, false>(piece, pieces),
+            5 => self.sweep_clusters::<5, AG, false>(piece, pieces),
+            6 => self.sweep_clusters::<6, AG, false>(piece, pieces),
+            7 => self.sweep_clusters::<7, AG, false>(piece, pieces),
+            8 => self.sweep_clusters::<8, AG, false>(piece, pieces),
+            _ => self.sweep_clusters::<MAX_BODIES, AG, false>(piece, pieces),
         }
     }
 
@@ -167,7 +171,7 @@ impl Simulator {
     /// up to its zero, found once per run. A slip whose guard holds keeps
     /// its direction: its peak is at an end of the run.
     #[inline(never)]
-    fn sweep_clusters<const NC: usize, const AG: bool>(
+    fn sweep_clusters<const NC: usize, const AG: bool, const RUNS: bool>(
         &mut self,
         piece: &mut Piece,
         pieces: &mut impl PieceSource,
@@ -175,6 +179,7 @@ impl Simulator {
         let h_max = self.h_max;
         let (sys, d, maps) = (&self.sys, &self.dynamics, &mut self.maps);
         debug_assert_eq!(d.n_clusters, NC);
+        debug_assert!(!RUNS || (NC == 1 && !AG && d.stick_band.is_none()));
         // Constants of the mode.
         let (has_band, (band_lo, band_hi)) = match d.stick_band {
             Some(band) => (true, band),
@@ -299,18 +304,18 @@ impl Simulator {
                     continue;
                 }
             }
-            // The structure's cluster alone: the substeps its energy proves
+            // The bare structure: the substeps its energy proves at once
             // (`proofs::energy_run`) through the pieces the source promised
             // (Fext constant), each paying its `∫|p|` (trapezoid, with a
             // margin for its rounding) from the budget.
-            if NC == 1 && !AG && lean[0] < lean[1] && inp.fext_rate == 0.0 {
+            if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
                 if wait > 0 {
                     wait -= 1;
                 } else {
                     let cf = load_accel + rule.accel(inp.ag, inp.fext);
                     let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
                     let [mut budget, slack] =
-                        energy_run(rates, [u0, vel[0]], cf, [peak_u0, peak_a0], d.stick_band);
+                        energy_run(rates, [u0, vel[0]], cf, [peak_u0, peak_a0]);
                     let before = taken;
                     loop {
                         if cur.i > cur.n
