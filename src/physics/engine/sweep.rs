@@ -37,7 +37,7 @@ use crate::physics::params::MAX_BODIES;
 /// substeps' start vectors `z = [u, v, p, p']` on one map: the structure
 /// cluster's viscous and input work are quadratic in `z`, so their sums over
 /// the run follow from these at its end.
-#[derive(Default)]
+#[derive(Clone, Copy, Default)]
 struct WorkSums {
     /// In pairs of two lanes: 00 11, 22 33, 02 13, 03 12, 01 23
     /// ([`QUAD_ORDER`] maps `ExactMap::quad`'s packing to them).
@@ -317,25 +317,26 @@ impl Simulator {
                     let [mut budget, slack] =
                         energy_run(rates, [u0, vel[0]], cf, [peak_u0, peak_a0]);
                     let before = taken;
+                    // In copies the loop keeps in registers.
+                    let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
                     loop {
-                        if cur.i > cur.n
-                            && !continue_piece(pieces, &mut cur, &mut inp, &mut lean, t0)
-                        {
+                        if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t0) {
                             break;
                         }
-                        let hs = cur.h;
-                        let z = [u0, vel[0], cf - inp.ag, rate_m - inp.ag_rate];
+                        let hs = c.h;
+                        let z = [u0, vel[0], cf - i.ag, rate_m - i.ag_rate];
                         let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
                         if !(cost + slack <= budget) {
                             break;
                         }
                         budget -= cost + slack;
-                        t0 = if cur.i == cur.n { cur.t_end } else { t0 + hs };
+                        t0 = if c.i == c.n { c.t_end } else { t0 + hs };
                         (u0, vel[0]) = (dot(&row_u, &z), dot(&row_v, &z));
-                        sums.add(&z);
-                        inp.ag += inp.ag_rate * hs;
-                        (cur.i, taken) = (cur.i + 1, taken + 1);
+                        s.add(&z);
+                        i.ag += i.ag_rate * hs;
+                        (c.i, taken) = (c.i + 1, taken + 1);
                     }
+                    (cur, inp, lean, sums) = (c, i, l, s);
                     if taken > before {
                         a_abs = cf - w2 * u0 - cm * vel[0];
                         continue;
