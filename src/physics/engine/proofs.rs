@@ -169,7 +169,7 @@ pub(super) fn structure_peaks_proved(
 /// <= r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the peaks.
 /// Margins (1e-9, 1e-12 a substep) cover the states' rounding. `[w2, ω,
 /// 1/sqrt(w2 + cm²)]`: the structure's.
-#[inline(never)]
+#[inline(always)]
 pub(super) fn energy_run(
     [w2, omega, inv_gain]: [f64; 3],
     [u, v]: [f64; 2],
