@@ -326,10 +326,11 @@ impl Simulator {
                         let hs = c.h;
                         let z = [u0, vel[0], cf - i.ag, rate_m - i.ag_rate];
                         let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
-                        if !(cost + slack <= budget) {
+                        if cost + slack <= budget {
+                            budget -= cost + slack;
+                        } else {
                             break;
                         }
-                        budget -= cost + slack;
                         t0 = if c.i == c.n { c.t_end } else { t0 + hs };
                         (u0, vel[0]) = (dot(&row_u, &z), dot(&row_v, &z));
                         s.add(&z);
