@@ -161,6 +161,26 @@ pub(super) fn structure_peaks_proved(
     [u_proved, a_proved]
 }
 
+/// A run of substeps of the bare structure (its forcing `p = cf - ag` per
+/// unit mass, `cf` constant) proved at once free of new peaks: `[budget,
+/// slack]`, each substep paying `h (|p(0)| + |p(h)|)/2 + slack`. With `r =
+/// sqrt(v² + w2 u²)`, `(r²/2)' = p v - cm v² <= |p| r`: `r` grows by `∫|p|`
+/// at most (the trapezoid bounds it, `|p|` convex on a substep), and `|u|
+/// <= r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the peaks.
+/// Margins (1e-9, 1e-12 a substep) cover the states' rounding. `[w2, ω,
+/// 1/sqrt(w2 + cm²)]`: the structure's.
+#[inline(always)]
+pub(super) fn energy_run(
+    [w2, omega, inv_gain]: [f64; 3],
+    [u, v]: [f64; 2],
+    cf: f64,
+    [peak_u, peak_a]: [f64; 2],
+) -> [f64; 2] {
+    let lim = (omega * peak_u).min((peak_a - cf.abs()) * inv_gain) * (1.0 - 1e-9);
+    let r = (v * v + w2 * (u * u)).sqrt();
+    [lim - r * (1.0 + 1e-9), 1e-12 * lim.abs()]
+}
+
 /// Whether `g > 0` over `(0, h]` is proved from its ends (values `g0`, `g1`,
 /// rates `d0`, `d1`) and `|g''| <= m2`: Taylor's bound from the start,
 /// `g(τ) >= g0 + d0 τ - m2 τ²/2`, is positive up to its root `r0`, and the

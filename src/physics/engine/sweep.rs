@@ -26,7 +26,7 @@ use super::exact_events::raise_substep_peaks;
 use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
 use super::proofs::{
-    in_band_proved, linear_guard_lasts, raise_peak_proved, slip_guard_proved,
+    energy_run, in_band_proved, linear_guard_lasts, raise_peak_proved, slip_guard_proved,
     structure_peaks_proved,
 };
 use super::{move_bodies, Excitation, Piece, PieceSource, Simulator};
@@ -37,7 +37,7 @@ use crate::physics::params::MAX_BODIES;
 /// substeps' start vectors `z = [u, v, p, p']` on one map: the structure
 /// cluster's viscous and input work are quadratic in `z`, so their sums over
 /// the run follow from these at its end.
-#[derive(Default)]
+#[derive(Clone, Copy, Default)]
 struct WorkSums {
     /// In pairs of two lanes: 00 11, 22 33, 02 13, 03 12, 01 23
     /// ([`QUAD_ORDER`] maps `ExactMap::quad`'s packing to them).
@@ -144,15 +144,19 @@ impl Simulator {
         pieces: &mut impl PieceSource,
     ) -> Option<(f64, Excitation)> {
         match self.dynamics.n_clusters {
-            1 => self.sweep_clusters::<1, AG>(piece, pieces),
-            2 => self.sweep_clusters::<2, AG>(piece, pieces),
-            3 => self.sweep_clusters::<3, AG>(piece, pieces),
-            4 => self.sweep_clusters::<4, AG>(piece, pieces),
-            5 => self.sweep_clusters::<5, AG>(piece, pieces),
-            6 => self.sweep_clusters::<6, AG>(piece, pieces),
-            7 => self.sweep_clusters::<7, AG>(piece, pieces),
-            8 => self.sweep_clusters::<8, AG>(piece, pieces),
-            _ => self.sweep_clusters::<MAX_BODIES, AG>(piece, pieces),
+            // The bare structure's cluster (no band): its energy runs.
+            1 if !AG && self.dynamics.stick_band.is_none() => {
+                self.sweep_clusters::<1, AG, true>(piece, pieces)
+            }
+            1 => self.sweep_clusters::<1, AG, false>(piece, pieces),
+            2 => self.sweep_clusters::<2, AG, false>(piece, pieces),
+            3 => self.sweep_clusters::<3, AG, false>(piece, pieces),
+            4 => self.sweep_clusters::<4, AG, false>(piece, pieces),
+            5 => self.sweep_clusters::<5, AG, false>(piece, pieces),
+            6 => self.sweep_clusters::<6, AG, false>(piece, pieces),
+            7 => self.sweep_clusters::<7, AG, false>(piece, pieces),
+            8 => self.sweep_clusters::<8, AG, false>(piece, pieces),
+            _ => self.sweep_clusters::<MAX_BODIES, AG, false>(piece, pieces),
         }
     }
 
@@ -167,7 +171,7 @@ impl Simulator {
     /// up to its zero, found once per run. A slip whose guard holds keeps
     /// its direction: its peak is at an end of the run.
     #[inline(never)]
-    fn sweep_clusters<const NC: usize, const AG: bool>(
+    fn sweep_clusters<const NC: usize, const AG: bool, const RUNS: bool>(
         &mut self,
         piece: &mut Piece,
         pieces: &mut impl PieceSource,
@@ -175,6 +179,7 @@ impl Simulator {
         let h_max = self.h_max;
         let (sys, d, maps) = (&self.sys, &self.dynamics, &mut self.maps);
         debug_assert_eq!(d.n_clusters, NC);
+        debug_assert!(!RUNS || (NC == 1 && !AG && d.stick_band.is_none()));
         // Constants of the mode.
         let (has_band, (band_lo, band_hi)) = match d.stick_band {
             Some(band) => (true, band),
@@ -208,6 +213,8 @@ impl Simulator {
         let terms = |h: f64| [0.5 * h * h, h].map(|k| accel_c.map(|a| k * a));
         let [mut half_h2a, mut ha] = terms(cur.h);
         let (mut w2, mut cm) = (map.w2, map.cm);
+        // For the energy runs (w2 and cm are the mode's, whatever the map).
+        let rates = [w2, w2.sqrt(), 1.0 / (w2 + cm * cm).sqrt()];
 
         // The run's state.
         let mut u0 = self.u[0];
@@ -244,6 +251,8 @@ impl Simulator {
         let mut t0 = self.t;
         let mut inp = Inputs::at(&cur, t0);
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
+        // Substeps to wait after a failed try of an energy run (below).
+        let (mut wait, cool) = (0, 8);
         let mut taken = 0u64;
         let mut pending = None;
         // The pieces the source promised to continue the last: `lean[0]`
@@ -252,21 +261,8 @@ impl Simulator {
 
         loop {
             if cur.i > cur.n {
-                let next = if lean[0] < lean[1] {
-                    pieces.continuing(lean[0])
-                } else {
-                    None
-                };
-                if let Some((t_end, ag, ag_rate)) = next {
-                    lean[0] += 1;
-                    // The source's promise: a record's next sample, as long
-                    // as the last, Fext constant (as it is), every value
-                    // finite. Its first substep follows at once (the last
-                    // piece had one at least).
-                    debug_assert!(cur.n >= 1);
-                    (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
-                    (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
-                    (inp.ag, inp.ag_rate) = (ag, ag_rate);
+                if continue_piece(pieces, &mut cur, &mut inp, &mut lean, t0) {
+                    // Its first substep follows at once.
                 } else {
                     pieces.skip(lean[0]);
                     lean = [0, 0];
@@ -306,6 +302,47 @@ impl Simulator {
                         fext_rate: exc.fext_rate,
                     };
                     continue;
+                }
+            }
+            // The bare structure: the substeps its energy proves at once
+            // (`proofs::energy_run`) through the pieces the source promised
+            // (Fext constant), each paying its `∫|p|` (trapezoid, with a
+            // margin for its rounding) from the budget.
+            if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
+                if wait > 0 {
+                    wait -= 1;
+                } else {
+                    let cf = load_accel + rule.accel(inp.ag, inp.fext);
+                    let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
+                    let [mut budget, slack] =
+                        energy_run(rates, [u0, vel[0]], cf, [peak_u0, peak_a0]);
+                    let before = taken;
+                    // In copies the loop keeps in registers.
+                    let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
+                    loop {
+                        if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t0) {
+                            break;
+                        }
+                        let hs = c.h;
+                        let z = [u0, vel[0], cf - i.ag, rate_m - i.ag_rate];
+                        let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
+                        if cost + slack <= budget {
+                            budget -= cost + slack;
+                        } else {
+                            break;
+                        }
+                        t0 = if c.i == c.n { c.t_end } else { t0 + hs };
+                        (u0, vel[0]) = (dot(&row_u, &z), dot(&row_v, &z));
+                        s.add(&z);
+                        i.ag += i.ag_rate * hs;
+                        (c.i, taken) = (c.i + 1, taken + 1);
+                    }
+                    (cur, inp, lean, sums) = (c, i, l, s);
+                    if taken > before {
+                        a_abs = cf - w2 * u0 - cm * vel[0];
+                        continue;
+                    }
+                    wait = cool;
                 }
             }
             // Every substep of a piece is `cur.h` long; the last ends at the
@@ -457,6 +494,31 @@ impl Simulator {
         }
         pending
     }
+}
+
+/// Moves `cur` from `t0` on to the next piece the source promised to
+/// continue it (a record's next sample, as long as the last, Fext constant
+/// as it is, every value finite): false where there is none.
+#[inline(always)]
+fn continue_piece(
+    pieces: &impl PieceSource,
+    cur: &mut Piece,
+    inp: &mut Inputs,
+    lean: &mut [usize; 2],
+    t0: f64,
+) -> bool {
+    if lean[0] >= lean[1] {
+        return false;
+    }
+    let Some((t_end, ag, ag_rate)) = pieces.continuing(lean[0]) else {
+        return false;
+    };
+    lean[0] += 1;
+    debug_assert!(cur.n >= 1);
+    (cur.t_ref, cur.t_end, cur.i) = (t0, t_end, 1);
+    (cur.exc.ag, cur.exc.ag_rate) = (ag, ag_rate);
+    (inp.ag, inp.ag_rate) = (ag, ag_rate);
+    true
 }
 
 /// The rows of a substep of length `h` on `z = [u, v, p, p']`: the map's
