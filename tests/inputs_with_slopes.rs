@@ -579,6 +579,8 @@ fn checked_pieces_promise_only_pieces_of_a_records_shape() {
                 }
                 None => {
                     assert!(!promised, "{what}: not promised");
+                    // Asked again, the same answer: the piece waits.
+                    assert_eq!(source.continuing(0), None, "{what}: asked again");
                     source.skip(0);
                     let waiting = source.next_piece().unwrap();
                     assert!(waiting.0.to_bits() == t_end.to_bits(), "{what}: waits");

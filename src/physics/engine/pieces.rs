@@ -80,8 +80,9 @@ pub trait PieceSource {
     /// Promised piece `k` (`k < promised()`): its end, `ag` and `ag_rate`
     /// (`Fext` and its zero rate stay as they were), if it keeps the
     /// promise; `None` takes nothing (the driver calls `skip` with the
-    /// pieces taken and asks `next_piece`). A source may move on as it
-    /// gives a piece, or leave that to `skip`.
+    /// pieces taken and asks `next_piece`), and asked again before that
+    /// answers `None` again. A source may move on as it gives a piece, or
+    /// leave that to `skip`.
     #[inline(always)]
     fn continuing(&mut self, _k: usize) -> Option<(f64, f64, f64)> {
         None
@@ -165,6 +166,9 @@ impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for CheckedPieces<I> {
     #[inline(always)]
     #[allow(clippy::eq_op)] // `sum - sum`: a finiteness test
     fn continuing(&mut self, _k: usize) -> Option<(f64, f64, f64)> {
+        if self.waiting.is_some() {
+            return None;
+        }
         let (t_end, exc) = self.pieces.next()?;
         // As long as the last up to rounding, Fext held, every value finite
         // (`x - x` is 0 where `x` is finite), and where it matters `ag`

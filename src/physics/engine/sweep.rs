@@ -501,7 +501,7 @@ impl Simulator {
 /// as it is, every value finite): false where there is none.
 #[inline(always)]
 fn continue_piece(
-    pieces: &impl PieceSource,
+    pieces: &mut impl PieceSource,
     cur: &mut Piece,
     inp: &mut Inputs,
     lean: &mut [usize; 2],
