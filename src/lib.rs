@@ -4,12 +4,14 @@
 //! as an FMI 2.0 and an FMI 3.0 Co-Simulation FMU (one library for both).
 //!
 //! Rooms, each using only the ones listed before it (but for `physics`
-//! reaching [`baselines`] through its solver choice and the step-end branch
-//! of its stepping loop):
+//! reaching [`baselines`] through the step-end branch of its stepping
+//! loop):
 //! - [`physics`]: the scene, stick/slip modes, the exact default.
 //! - [`baselines`]: the RK4 baselines the charts compare against (the
 //!   paper's step-end RK4, tanh-regularized friction), apart from the
 //!   default and never entered by it.
+//! - [`solver`]: the FMU's `solver` choice between the exact engine and a
+//!   baseline, and the `Stepper` trait that drives either.
 //! - [`ground`]: ground-motion records and driving a simulation through one.
 //! - [`fmi`]: the FMU (instance state machine, variables, C API).
 //! - [`batch`]: `sllRunBatch`, many parameter sets over one record in one
@@ -26,6 +28,7 @@ pub mod fmi;
 pub mod ground;
 pub mod limits;
 pub mod physics;
+pub mod solver;
 
 pub use ground::record::{GroundMotion, RecordError};
 pub use physics::engine::{Excitation, Outputs, SimError, Simulator, Stats};

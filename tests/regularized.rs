@@ -6,7 +6,7 @@ use common::*;
 use stacked_live_load::baselines::regularized::{self, RegularizedSimulator};
 use stacked_live_load::ground::record;
 use stacked_live_load::physics::snapshot::{ByteReader, ByteWriter};
-use stacked_live_load::physics::solver::{Solver, SolverKind, Stepper};
+use stacked_live_load::solver::{Solver, SolverKind, Stepper};
 use stacked_live_load::*;
 use std::f64::consts::PI;
 
@@ -130,8 +130,8 @@ fn solver_3_steps_within_the_stability_bound_of_the_whole_stack() {
     // Tolerance: 1e-5 of the input energy (docs/robustness.md); the
     // residual is the baseline's own RK4 error (worst measured 2.1e-6).
     use stacked_live_load::baselines::regularized::stable_step;
-    use stacked_live_load::physics::solver::{Solver, SolverKind};
     use stacked_live_load::physics::system::System;
+    use stacked_live_load::solver::{Solver, SolverKind};
     let records = [
         broadband(8.0, 0.005, 0.4 * 9.81),
         scaled_to_pga(&broadband(6.0, 0.01, 1.0), 0.8 * 9.81),

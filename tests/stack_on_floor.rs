@@ -128,7 +128,7 @@ fn stack_on_floor_is_the_engines_prescribed_support_bit_for_bit() {
             ..exc
         };
         let o = stacked_live_load::fmi::ports::outputs_at_step_start(
-            &stacked_live_load::physics::solver::Solver::Exact(sim.clone()),
+            &stacked_live_load::solver::Solver::Exact(sim.clone()),
             &held,
             mobility,
         )

@@ -18,7 +18,7 @@ use crate::ground::record::GroundMotion;
 use crate::limits;
 use crate::physics::engine::{Excitation, Outputs};
 use crate::physics::params::{ParamError, Params};
-use crate::physics::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
+use crate::solver::{Solver, SolverKind, Stepper, DEFAULT_FRICTION_EPS};
 use std::path::{Component, Path, PathBuf};
 use std::sync::Arc;
 

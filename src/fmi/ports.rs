@@ -5,8 +5,8 @@
 use crate::fmi::variables::Id;
 use crate::physics::engine::{Excitation, Outputs, SimError, Simulator};
 use crate::physics::mode::{stick_capacity, Contact, Dynamics};
-use crate::physics::solver::{Solver, Stepper};
 use crate::physics::system::System;
+use crate::solver::{Solver, Stepper};
 
 /// How far [`at_step_start`] looks ahead for a switch at the very start of
 /// the next step (s): a switch located again along other internal steps

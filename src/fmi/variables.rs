@@ -9,7 +9,7 @@
 //! token picks the model; each model has its own table ([`Model::table`]).
 
 use crate::physics::params::{check_scalar, ParamError, Params, MAX_BLOCKS, RANGES};
-use crate::physics::solver::SolverKind;
+use crate::solver::SolverKind;
 
 /// The models of this binary.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -625,7 +625,7 @@ pub fn table() -> Vec<Variable> {
     add(
         Id::FrictionEps,
         Some("Velocity"),
-        real(crate::physics::solver::DEFAULT_FRICTION_EPS),
+        real(crate::solver::DEFAULT_FRICTION_EPS),
         "Solver 3 only: friction is -muk N tanh(v / frictionEps)",
     );
     add(

@@ -6,7 +6,7 @@
 //! linear, before the first and after the last it is zero.
 
 use crate::physics::engine::{same_up_to_rounding, Excitation, PieceSource, SimError};
-use crate::physics::solver::Stepper;
+use crate::solver::Stepper;
 use std::fmt;
 
 /// A tabulated ground acceleration (m/s^2) at increasing times (s).
@@ -407,7 +407,7 @@ mod tests {
         pieces: Vec<(f64, f64, f64)>,
     }
 
-    impl crate::physics::solver::Stepper for Recorder {
+    impl crate::solver::Stepper for Recorder {
         fn time(&self) -> f64 {
             self.t
         }

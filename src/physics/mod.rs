@@ -8,7 +8,6 @@
 //! - [`engine`]: the exact default (and the stepping loop the step-end RK4
 //!   baseline of [`crate::baselines`] shares); peaks and energies.
 //! - [`hermite`]: peaks between steps from the cubic Hermite interpolant.
-//! - [`solver`]: the FMU's three solver choices behind one type.
 //! - [`snapshot`]: the byte format of saved states.
 //! - [`sdof`]: the exact linear oscillator (Nigam–Jennings), an oracle.
 
@@ -18,5 +17,4 @@ pub mod mode;
 pub mod params;
 pub mod sdof;
 pub mod snapshot;
-pub mod solver;
 pub mod system;

@@ -18,7 +18,7 @@ const STATE_VERSION: u32 = 6;
 use crate::limits::{self, Num, MAX_PATH_BYTES, MAX_TIME};
 use crate::physics::params::{check_scalar, MAX_BLOCKS};
 use crate::physics::snapshot::SnapshotError;
-use crate::physics::solver::{Solver, SolverKind, Stepper};
+use crate::solver::{Solver, SolverKind, Stepper};
 
 /// Every field of a deserialized state, beyond what the engine checks of its
 /// own: times, parameters (of every block, present or not) and inputs with

@@ -11,7 +11,7 @@ use crate::ground::record;
 use crate::limits::{self, Num};
 use crate::physics::engine::{Excitation, Outputs, SimError};
 use crate::physics::params::check_scalar;
-use crate::physics::solver::{Solver, Stepper};
+use crate::solver::{Solver, Stepper};
 
 impl Instance {
     /// Outputs of the current state; in initialization mode the simulator

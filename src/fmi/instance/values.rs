@@ -8,7 +8,7 @@ use crate::fmi::variables::{Causality, Id};
 use crate::limits::{Num, MAX_PATH_BYTES};
 use crate::physics::engine::Outputs;
 use crate::physics::params::{ParamError, MAX_BLOCKS};
-use crate::physics::solver::SolverKind;
+use crate::solver::SolverKind;
 
 impl Instance {
     pub(super) fn lookup(&mut self, func: &str, vr: u32) -> Result<Id, Status> {
