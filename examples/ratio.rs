@@ -103,11 +103,15 @@ fn main() {
                 b.push(t.elapsed().as_secs_f64() / reps as f64);
             }
             let (ma, mb) = (common::median(a), common::median(b));
+            let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+            record::run(&mut sim, gm, 1.0).unwrap();
             println!(
-                "{name:8} {scene:8} {:8.1} us / {other} {:8.1} us = {:.2}x",
+                "{name:8} {scene:8} {:8.1} us / {other} {:8.1} us = {:.2}x, {} switches, {} samples",
                 ma * 1e6,
                 mb * 1e6,
-                ma / mb
+                ma / mb,
+                sim.stats().events,
+                gm.accel.len()
             );
         }
     }

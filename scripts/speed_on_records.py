@@ -1,0 +1,96 @@
+"""The default's speed on every real record in ../shared/ground_motions
+(issue #21: the targets on records the engine was not tuned on).
+
+    python scripts/speed_on_records.py --out DIR [--rounds N]
+
+Runs `cargo run --release --example ratio` with RECORDS set to every record
+(its first 20 s) for the bench's scenes: the bare structure, the paper's two
+blocks, eight blocks with mus = muk and issue #21's eight blocks with
+mus > muk. Each figure is the median of N rounds timed alternately with the
+floor (the exact Nigam-Jennings recurrence of the bare structure over the
+same samples). Writes DIR/speed_on_records.csv and DIR/speed_on_records.png:
+the ratio to the floor against the switches per 1 000 samples (the bare
+structure: against the sample interval).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import use_venv  # noqa: E402,F401  (re-runs this script under the repository's .venv if needed)
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+RECORDS = ROOT.parent / "shared" / "ground_motions"
+SCENES = {"n0": ("bare structure", 3), "n2": ("two blocks (paper)", 6),
+          "n8": ("8 blocks, mus = muk", 12), "n8s": ("8 blocks, mus > muk (#21)", 12)}
+
+
+def measure(rounds: int) -> list[dict]:
+    paths = sorted(p for p in RECORDS.iterdir() if p.suffix.lower() == ".at2")
+    env = dict(os.environ, ROUNDS=str(rounds), REPS="10", RECORDS=":".join(map(str, paths)))
+    cmd = ["cargo", "run", "--quiet", "--release", "--example", "ratio", "--", *SCENES]
+    rows = []
+    with subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, text=True) as proc:
+        for line in proc.stdout:
+            # "NAME SCENE  x us / floor  y us = r.rrx, k switches, n samples"
+            w = line.replace(",", " ").split()
+            row = {"record": w[0], "scene": w[1], "engine_us": float(w[2]),
+                   "floor_us": float(w[6]), "ratio": float(w[9].rstrip("x")),
+                   "switches": int(w[10]), "samples": int(w[12])}
+            rows.append(row)
+            print(f"[{len(rows):3d}/{len(paths) * len(SCENES)}] {row['record']:30s} {row['scene']:4s} "
+                  f"{row['ratio']:7.2f}x the floor, {row['switches']} switches", flush=True)
+    if proc.returncode:
+        sys.exit(f"{' '.join(cmd)} failed")
+    return rows
+
+
+def plot(rows: list[dict], path: Path) -> None:
+    fig, axes = plt.subplots(2, 2, figsize=(11, 8))
+    for ax, (scene, (title, target)) in zip(axes.flat, SCENES.items()):
+        pts = [r for r in rows if r["scene"] == scene]
+        # The bare structure never switches: its cost follows the sampling.
+        per_sample = scene == "n0"
+        x = [20.0 / r["samples"] if per_sample else 1000 * r["switches"] / r["samples"]
+             for r in pts]
+        y = [r["ratio"] for r in pts]
+        ax.scatter(x, y, s=18)
+        for xi, yi, r in zip(x, y, pts):
+            ax.annotate(r["record"][:14], (xi, yi), fontsize=6, alpha=0.7)
+        ax.axhline(target, color="red", lw=1, ls="--", label=f"target {target}x")
+        ax.set_yscale("log")
+        ax.set_xlabel("sample interval (s)" if per_sample else "switches per 1000 samples")
+        ax.set_ylabel("engine / floor")
+        ax.set_title(title, fontsize=10)
+        ax.legend(fontsize=8)
+    fig.suptitle("The default against the floor on the 20 shared records (first 20 s)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--rounds", type=int, default=7)
+    args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    rows = measure(args.rounds)
+    with open(args.out / "speed_on_records.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    plot(rows, args.out / "speed_on_records.png")
+    print(f"wrote {args.out / 'speed_on_records.csv'} and {args.out / 'speed_on_records.png'}")
+
+
+if __name__ == "__main__":
+    main()
