@@ -657,7 +657,8 @@ fn cluster_law(
 
 /// The force of stuck interface `j` of `mode` (body j-1 on body j) under
 /// the structure load `load0`, as [`cluster_law`] and [`Dynamics::force`] have
-/// it: only its sign is used, to order the walk's options.
+/// it (inlined: the proofs take it at every stick).
+#[inline(always)]
 fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
     let bottom = (1..j).rev().find(|&i| !mode.is_stuck(i)).unwrap_or(0);
     let end = (j + 1..sys.n + 1)
@@ -724,23 +725,49 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
     if let Some(res) = resolve_most_stuck(sys, req) {
         return res;
     }
-    resolve_by_walk(sys, req)
+    resolve_cascade(sys, req).unwrap_or_else(|| resolve_by_walk(sys, req))
 }
 
-/// [`resolve`] where [`resolve_most_stuck`] does not decide: the walk (out
-/// of line, so that the usual switch runs through compact code).
+/// [`resolve`] for a cascade with mus = muk: from all of `zero` stuck (as
+/// tried already but where a stick must break), the stick most over its
+/// static limit slips the way its force drives it, until the contact law
+/// holds: the walk's assignment where [`only_consistent`] proves it unique.
+#[inline(never)]
+fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
+    let (zero, mut mode) = (req.zero & !free_mask(sys), req.mode);
+    let ifaces = || (1..sys.n + 1).filter(move |&j| zero & (1 << j) != 0);
+    for j in ifaces() {
+        (sys.mus[j] == sys.muk[j]).then_some(())?;
+        mode.contact[j] = Contact::Stuck;
+    }
+    for tries in 1..zero.count_ones() + 2 {
+        if (tries > 1 || zero & req.must_break != 0) && consistent(sys, &mode, zero, req.load0) {
+            let (consistent, ambiguous) = (true, false);
+            let res = Resolved {
+                mode,
+                consistent,
+                ambiguous,
+                tries,
+            };
+            return only_consistent(sys, &mode, zero, req.load0, true).then_some(res);
+        }
+        let (mut j, mut x) = (0, 1.0f64);
+        for i in ifaces().filter(|&i| mode.is_stuck(i)) {
+            let f = stuck_force(sys, &mode, req.load0, i) / (sys.mus[i] * sys.normal[i]);
+            (j, x) = if f.abs() > x.abs() { (i, f) } else { (j, x) };
+        }
+        (j > 0).then_some(())?;
+        mode.contact[j] = [Contact::SlipForward, Contact::SlipBackward][usize::from(x > 0.0)];
+    }
+    None
+}
+
+/// [`resolve`] where [`resolve_most_stuck`] and [`resolve_cascade`] do not
+/// decide: the walk (out of line: the usual switch runs compact code).
 #[inline(never)]
 fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     let walk = Walk::new(sys, req);
-    let mut search = Search {
-        mode: req.mode,
-        best: None,
-        count: 0,
-        bound: true,
-        limit: u32::MAX,
-        tries: 0,
-    };
-    walk.search(&mut search);
+    let mut search = walk.search(true, u32::MAX);
     let Some((_, mode)) = search.best else {
         let mut all = resolve_by_enumeration(sys, req);
         all.tries += search.tries;
@@ -750,15 +777,7 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     // with mus > muk; the bounded walk may have skipped the others.
     let ambiguous = !walk.all_equal_friction()
         && (search.count > 1 || {
-            let mut all = Search {
-                mode: req.mode,
-                best: None,
-                count: 0,
-                bound: false,
-                limit: 2,
-                tries: 0,
-            };
-            walk.search(&mut all);
+            let all = walk.search(false, 2);
             search.tries += all.tries;
             all.count > 1
         });
@@ -824,21 +843,21 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 }
 
 /// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
-/// [`away_from_kinetic`] covers every rival (one slip: all but `mode` with it stuck, checked;
+/// [`only_consistent`] covers every rival (one slip: all but `mode` with it stuck, checked;
 /// a free interface in `zero` fails it), else the walk's.
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
     let (zero, slips) = (req.zero, req.zero & req.must_break);
     let proved = equal
         || match slips.count_ones() {
-            0 => away_from_kinetic(sys, mode, zero, req.load0),
+            0 => only_consistent(sys, mode, zero, req.load0, false),
             1 => {
                 let mut stuck = *mode;
                 stuck.contact[slips.trailing_zeros() as usize] = Contact::Stuck;
                 if consistent(sys, &stuck, zero, req.load0) {
                     return (true, 1);
                 }
-                away_from_kinetic(sys, mode, zero, req.load0)
-                    && away_from_kinetic(sys, &stuck, zero & !slips, req.load0)
+                only_consistent(sys, mode, zero, req.load0, false)
+                    && only_consistent(sys, &stuck, zero & !slips, req.load0, false)
             }
             _ => false,
         };
@@ -847,20 +866,32 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
         .map_or((false, 0), |r| (r.ambiguous, r.tries))
 }
 
-/// Whether no consistent assignment differs from `mode` at `ifaces` (by
-/// slipped sticks, reversed slips): `lambda |f' - f|^2 <= (f' - f)'(r' - r)`
-/// (Delassus matrix `>= lambda I`) sums at most `2 muk N e` per stick, `4 muk
-/// N e` per slip (`e`: 10x the slip slack), `|f'_i - f_i| >= muk N - |F_i|`, `2 muk N`.
-fn away_from_kinetic(sys: &System, mode: &Mode, ifaces: u32, load0: f64) -> bool {
-    let lambda = 4.0 / ((2 * sys.n + 1).pow(2) as f64 * sys.mass[1..=sys.n].iter().sum::<f64>());
-    let e = 10.0 * CONSISTENCY_TOL * sys.g;
+/// Whether no consistent assignment differs from `mode` at `ifaces` by
+/// slipped sticks, reversed slips (or, `sticking`, stuck slips), `mode`
+/// consistent there. A rival's force changes `g` move the bodies by `da`:
+/// `Q = Σ m da² = Σ g_i dr_i` (Newton, by parts), each term at most `4 muk N
+/// eps g`, or `(mus N (1 + eps) - muk N) r` where a slip sticks (`r > 0` its
+/// relative acceleration); a difference needs `Q M` (`M` the blocks' mass) at
+/// least `(muk N - |F|)²` (a stick slipping), `(2 muk N)²` (a slip reversing)
+/// or `M r² min(m_i, m_(i-1)) / 2` (a slip sticking): each twice the bound.
+fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking: bool) -> bool {
+    let d = sticking.then(|| Dynamics::clusters(sys, mode));
+    let (eps, mass) = (CONSISTENCY_TOL, sys.mass_up[1][sys.n + 1]);
+    let (mut bound, mut need) = (0.0, f64::INFINITY);
     (1..sys.n + 1).filter(|&j| ifaces & (1 << j) != 0).all(|j| {
-        let kinetic = sys.muk[j] * sys.normal[j];
-        let (m, term) = match mode.is_stuck(j) {
-            true => (kinetic - stuck_force(sys, mode, load0, j).abs(), 2.0),
-            false => (2.0 * kinetic, 4.0),
-        };
-        m > 0.0 && lambda * m * m > term * kinetic * e // (a NaN fails)
+        let k = sys.muk[j] * sys.normal[j];
+        bound += 4.0 * k * eps * sys.g;
+        need = need.min(if mode.is_stuck(j) {
+            let margin = (k - stuck_force(sys, mode, load0, j).abs()).max(0.0);
+            margin * margin
+        } else if let Some(d) = &d {
+            let r = (mode.contact[j].slip_sign() * d.rel_accel(j, load0)).max(0.0);
+            bound += (sys.mus[j] * sys.normal[j] * (1.0 + eps) - k) * r;
+            (4.0 * k * k).min(0.5 * sys.mass[j].min(sys.mass[j - 1]) * mass * r * r)
+        } else {
+            4.0 * k * k
+        });
+        need > 2.0 * bound * mass // (a NaN fails)
     })
 }
 
@@ -997,14 +1028,22 @@ impl<'a> Walk<'a> {
             .all(|j| self.sys.mus[j] == self.sys.muk[j])
     }
 
-    /// Walks the assignments into `search`.
-    fn search(&self, search: &mut Search) {
-        search.mode = self.req.mode;
+    /// Walks the assignments: `bound`, and at most `limit` consistent ones.
+    fn search(&self, bound: bool, limit: u32) -> Search {
+        let mut search = Search {
+            mode: self.req.mode,
+            best: None,
+            count: 0,
+            bound,
+            limit,
+            tries: 0,
+        };
         let open = Open {
             bottom: 0,
             accel_below: 0.0,
         };
-        self.choose(1, open, (0, 0, false), search);
+        self.choose(1, open, (0, 0, false), &mut search);
+        search
     }
 
     /// Whether every completion of a branch at interface `j` (`stuck` and
