@@ -493,7 +493,7 @@ impl Dynamics {
 /// the stack moves at `(P + s') m_b / (1 + m_b M')`: the expression above,
 /// linear in `ag`, holding continuously until the inputs are next set. In
 /// the reference mode, or with `m_b = 0`, `g = 1` and `c = 0` exactly. The
-/// one rule of the resolver ([`cluster_law`]) and of every integrator
+/// one rule of the resolver (`cluster_law`) and of every integrator
 /// (through [`Dynamics`]). (docs/model-and-numerics.md, "A stack on a
 /// prescribed support".)
 #[inline]
