@@ -319,25 +319,27 @@ impl Simulator {
                     let before = taken;
                     // In copies the loop keeps in registers.
                     let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
+                    let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
                     loop {
-                        if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t0) {
+                        if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t) {
                             break;
                         }
                         let hs = c.h;
-                        let z = [u0, vel[0], cf - i.ag, rate_m - i.ag_rate];
+                        let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
                         let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
                         if cost + slack <= budget {
                             budget -= cost + slack;
                         } else {
                             break;
                         }
-                        t0 = if c.i == c.n { c.t_end } else { t0 + hs };
-                        (u0, vel[0]) = (dot(&row_u, &z), dot(&row_v, &z));
+                        t = if c.i == c.n { c.t_end } else { t + hs };
+                        (u, v) = (dot(&row_u, &z), dot(&row_v, &z));
                         s.add(&z);
                         i.ag += i.ag_rate * hs;
-                        (c.i, taken) = (c.i + 1, taken + 1);
+                        (c.i, n) = (c.i + 1, n + 1);
                     }
                     (cur, inp, lean, sums) = (c, i, l, s);
+                    (t0, u0, vel[0], taken) = (t, u, v, n);
                     if taken > before {
                         a_abs = cf - w2 * u0 - cm * vel[0];
                         continue;
