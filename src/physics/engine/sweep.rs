@@ -306,8 +306,7 @@ impl Simulator {
             }
             // The bare structure: the substeps its energy proves at once
             // (`proofs::energy_run`) through the pieces the source promised
-            // (Fext constant), each paying its `∫|p|` (trapezoid, with a
-            // margin for its rounding) from the budget.
+            // (Fext constant), each paying its `∫|p|` from the budget.
             if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
                 if wait > 0 {
                     wait -= 1;
@@ -316,28 +315,29 @@ impl Simulator {
                     let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
                     let [mut budget, slack] =
                         energy_run(rates, [u0, vel[0]], cf, [peak_u0, peak_a0]);
-                    let before = taken;
                     // In copies the loop keeps in registers.
                     let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
+                    let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
                     loop {
-                        if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t0) {
+                        if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t) {
                             break;
                         }
                         let hs = c.h;
-                        let z = [u0, vel[0], cf - i.ag, rate_m - i.ag_rate];
+                        let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
                         let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
                         if cost + slack <= budget {
                             budget -= cost + slack;
                         } else {
                             break;
                         }
-                        t0 = if c.i == c.n { c.t_end } else { t0 + hs };
-                        (u0, vel[0]) = (dot(&row_u, &z), dot(&row_v, &z));
+                        t = if c.i == c.n { c.t_end } else { t + hs };
+                        (u, v) = (dot(&row_u, &z), dot(&row_v, &z));
                         s.add(&z);
                         i.ag += i.ag_rate * hs;
-                        (c.i, taken) = (c.i + 1, taken + 1);
+                        (c.i, n) = (c.i + 1, n + 1);
                     }
-                    (cur, inp, lean, sums) = (c, i, l, s);
+                    let before = taken;
+                    (cur, inp, lean, sums, t0, u0, vel[0], taken) = (c, i, l, s, t, u, v, n);
                     if taken > before {
                         a_abs = cf - w2 * u0 - cm * vel[0];
                         continue;
