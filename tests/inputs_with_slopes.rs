@@ -589,3 +589,37 @@ fn checked_pieces_promise_only_pieces_of_a_records_shape() {
         }
     }
 }
+
+#[test]
+fn one_call_ends_at_its_first_none_and_refuses_time_going_back() {
+    // Found in review: pieces a few ulps long whose next ends earlier must
+    // stop the call with BadTime (as one `advance` per piece does), and an
+    // iterator that gives None and then more pieces ends the call at its
+    // first None (as a `Plain` source did).
+    let p = random_scene(&mut Rng(0x0005_1de5), 2);
+    let t0 = 1.0f64;
+    let ulp = t0 * f64::EPSILON;
+    let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+    sim.advance(t0, &Excitation::default()).unwrap();
+    let ends = [
+        t0 + 2.0 * ulp,
+        t0 + 4.0 * ulp,
+        t0 + 2.0 * ulp,
+        t0 + 4.0 * ulp,
+    ];
+    let err = sim
+        .advance_pieces(ends.iter().map(|&t| (t, Excitation::default())))
+        .unwrap_err();
+    assert!(matches!(err, SimError::BadTime { .. }), "{err}");
+    assert_eq!(sim.time(), ends[1], "stopped at the last good piece");
+
+    // 20 pieces of 0.01 s, then None once, then 20 more.
+    let mut k = 0;
+    let gappy = std::iter::from_fn(|| {
+        k += 1;
+        (k != 21 && k <= 41).then(|| (0.01 * (k - (k > 21) as usize) as f64, Excitation::default()))
+    });
+    let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+    sim.advance_pieces(gappy).unwrap();
+    assert!((sim.time() - 0.2).abs() < 1e-12, "ended at {}", sim.time());
+}

@@ -109,7 +109,7 @@ impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for Plain<I> {
 /// once for a stretch of samples): a piece that breaks it waits for
 /// `next_piece`, which the driver checks in full.
 pub struct CheckedPieces<I> {
-    pieces: I,
+    pieces: std::iter::Fuse<I>,
     waiting: Option<(f64, Excitation)>,
     /// A jump of `ag` breaks the promise (it moves a prescribed support).
     ag_continuous: bool,
@@ -122,12 +122,14 @@ pub struct CheckedPieces<I> {
     ag_end: f64,
 }
 
-impl<I> CheckedPieces<I> {
-    /// The pieces of `pieces`, the first to be checked in full; with
-    /// `ag_continuous` a jump of `ag` breaks the promise.
+impl<I: Iterator> CheckedPieces<I> {
+    /// The pieces of `pieces` up to its first `None`, the first to be
+    /// checked in full; with `ag_continuous` (needed on a prescribed
+    /// support, where a jump of `ag` moves the support) a jump of `ag`
+    /// breaks the promise.
     pub fn new(pieces: I, ag_continuous: bool) -> CheckedPieces<I> {
         CheckedPieces {
-            pieces,
+            pieces: pieces.fuse(),
             waiting: None,
             ag_continuous,
             end: f64::NAN,
@@ -170,13 +172,14 @@ impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for CheckedPieces<I> {
             return None;
         }
         let (t_end, exc) = self.pieces.next()?;
-        // As long as the last up to rounding, Fext held, every value finite
-        // (`x - x` is 0 where `x` is finite), and where it matters `ag`
-        // without a jump.
+        // Later, as long as the last up to rounding, Fext held, every value
+        // finite (`x - x` is 0 where `x` is finite), and where it matters
+        // `ag` without a jump.
         let sum = exc.ag + exc.ag_rate + t_end;
         if exc.fext == self.fext
             && exc.fext_rate == 0.0
             && sum - sum == 0.0
+            && t_end > self.end
             && same_up_to_rounding(t_end - self.end, self.length, t_end)
             && !(self.ag_continuous && is_jump(exc.ag, self.ag_end))
         {
