@@ -79,7 +79,7 @@ pub(super) fn raise_substep_peaks(
     taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
     if let Some(peak) = peak_u {
-        raise_peak_exact(peak, &u, [u_end, u.spread(1.0)], 1.0, tol)?;
+        raise_peak_exact(peak, &u, Some(&v), [u_end, u.spread(1.0)], 1.0, tol)?;
     }
     if let Some(peak) = peak_a {
         let mut a = u;
@@ -88,7 +88,7 @@ pub(super) fn raise_substep_peaks(
         }
         a.c[0] += cf;
         a.c[1] += cf_rate * h;
-        raise_peak_exact(peak, &a, [a_end, a.spread(1.0)], 1.0, tol)?;
+        raise_peak_exact(peak, &a, None, [a_end, a.spread(1.0)], 1.0, tol)?;
     }
     Ok(())
 }
@@ -283,11 +283,12 @@ impl Flow {
 /// muted and its peaks taken at its ends (a stretch of `h_fine / 4096`).
 const MAX_SPLIT_DEPTH: u32 = 12;
 
-/// [`raise_peak_exact`], or the ends only (`ends_only`: a stretch at the
+/// [`raise_peak_exact`] (`rate` a multiple of `y'` or `None`), or the ends only (`ends_only`: a stretch at the
 /// deepest split).
 fn raise_peak_over(
     peak: &mut f64,
     y: &Poly,
+    rate: Option<&Poly>,
     ends: [f64; 2],
     s: f64,
     tol: f64,
@@ -297,7 +298,7 @@ fn raise_peak_over(
         *peak = peak.max(y.c[0].abs()).max(ends[0].abs());
         return Ok(());
     }
-    raise_peak_exact(peak, y, ends, s, tol)
+    raise_peak_exact(peak, y, rate, ends, s, tol)
 }
 
 /// What the search of a stretch found.
@@ -508,6 +509,7 @@ impl Simulator {
         raise_peak_over(
             &mut peak_u0,
             &flow.u,
+            Some(&flow.v),
             [u0, flow.u_spread],
             s,
             peak_tol,
@@ -520,6 +522,7 @@ impl Simulator {
             raise_peak_over(
                 &mut peak_a0,
                 accel,
+                None,
                 [accel_end, spread],
                 s,
                 peak_tol,
@@ -614,7 +617,7 @@ impl Simulator {
                     c[k + 1] += upper[k];
                 }
                 let slip = Poly::new(c, flow.u.deg.max(3));
-                raise_peak_over(peak, &slip, [slip1, spread], s, peak_tol, ends_only)?;
+                raise_peak_over(peak, &slip, None, [slip1, spread], s, peak_tol, ends_only)?;
             }
         } else {
             let tau = if s >= 1.0 { flow.h } else { s * flow.h };

@@ -58,6 +58,18 @@ impl Poly {
         rest.iter().rev().fold(0.0, |y, c| (y + c.abs()) * s)
     }
 
+    /// `Σ_(k > n) k!/(k-n)! |c_k| s^(k-n)` for the `n`-th derivative (1 or
+    /// 2): a bound of `|p^(n)(σ) - p^(n)(0)|` over `[0, s]` (its
+    /// [`Poly::spread`], without building it).
+    pub(super) fn rate_spread(&self, n: usize, s: f64) -> f64 {
+        let mut y = 0.0;
+        for k in (n + 1..self.deg + 1).rev() {
+            let f = if n == 1 { k } else { k * (k - 1) };
+            y = (y + (f as f64 * self.c[k]).abs()) * s;
+        }
+        y
+    }
+
     pub(super) fn negate(&mut self) {
         for c in &mut self.c[..=self.deg] {
             *c = -*c;
@@ -212,14 +224,47 @@ fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f
     b
 }
 
+/// The only zero of `g` in `(0, e)` (`g(0) = g0` and `g(e) = g1` of
+/// opposite signs) to within `tol`, where `|g'| >= m1 > 0` over `[0, e]`,
+/// or (`m1 <= 0`) `g` is convex or concave: its slope at the zero is then
+/// at least `|g(f)| / (b - a)` on a bracket `[a, b]`, `f` its end where `g`
+/// and `g''` differ in sign. Newton's method from the secant, kept inside
+/// the bracket, stopped once `|g(x)|` over that slope is `<= tol` (the
+/// distance to the zero, by the mean value or the chord) or the bracket is
+/// `tol` wide. A peak needs no closer (`PEAK_TOL`).
+fn critical_point(g: &Poly, [g0, g1]: [f64; 2], e: f64, [m1, tol]: [f64; 2]) -> f64 {
+    let [mut a, mut ga, mut b, mut gb] = [0.0, g0, e, g1];
+    let mut x = g0 / (g0 - g1) * e;
+    for _ in 0..100 {
+        let (gx, dx) = g.eval_d(x);
+        let far = if (ga > 0.0) != (g.c[2] > 0.0) { ga } else { gb };
+        let slope = if m1 > 0.0 { m1 } else { far.abs() / (b - a) };
+        if gx.abs() <= slope * tol || b - a <= tol {
+            break;
+        }
+        if (gx > 0.0) == (g0 > 0.0) {
+            (a, ga) = (x, gx);
+        } else {
+            (b, gb) = (x, gx);
+        }
+        x -= gx / dx;
+        if !(x > a && x < b) {
+            x = 0.5 * (a + b);
+        }
+    }
+    x
+}
+
 /// Raises `peak` to the largest `|y|` over `[0, e]`: at the ends (`y_end`
 /// the value at `e`), or where `y'` changes sign. `spread` bounds
 /// `|y - y(0)|` over `[0, 1]` (`Poly::spread`): when it keeps `|y|` below
-/// the peak, nothing else is computed.
+/// the peak, nothing else is computed. `rate`: a positive multiple of `y'`
+/// when the caller has one (`v` for `u`), else `y'` is built.
 #[inline]
 pub(super) fn raise_peak_exact(
     peak: &mut f64,
     y: &Poly,
+    rate: Option<&Poly>,
     [y_end, spread]: [f64; 2],
     e: f64,
     tol: f64,
@@ -231,34 +276,46 @@ pub(super) fn raise_peak_exact(
     if y.c[0].abs() + spread <= *peak || y.c[0].abs() + y.spread(e) <= *peak {
         return Ok(());
     }
-    raise_peak_inside(peak, y, e, tol)
+    raise_peak_inside(peak, y, rate, e, tol)
 }
 
 /// [`raise_peak_exact`] where its bounds leave an interior peak possible:
 /// out of line, so that the usual case (the bounds decide) is a few
 /// instructions at its callers.
 #[inline(never)]
-fn raise_peak_inside(peak: &mut f64, y: &Poly, e: f64, tol: f64) -> Result<(), Undecided> {
-    let dy = y.derivative();
+fn raise_peak_inside(
+    peak: &mut f64,
+    y: &Poly,
+    rate: Option<&Poly>,
+    e: f64,
+    tol: f64,
+) -> Result<(), Undecided> {
+    let built;
+    let dy = match rate {
+        Some(dy) => dy,
+        None => {
+            built = y.derivative();
+            &built
+        }
+    };
     let dy_spread = dy.spread(e);
     if dy.c[0].abs() > dy_spread {
         return Ok(()); // y' keeps its sign: the ends decide
     }
     // The common case, one critical point: y' changes sign between the
-    // ends and y'' keeps its sign over [0, e], so y' has a single zero.
-    let ddy = dy.derivative();
+    // ends, and over [0, e] either |y''| >= m1 > 0 or y''' keeps its sign
+    // (y' convex or concave: it crosses zero once).
     let (d0, d_end) = (dy.c[0], dy.eval(e));
-    if d0 * d_end < 0.0 && ddy.c[0].abs() > ddy.spread(e) {
-        let mut g = dy;
-        if d0 < 0.0 {
-            g.negate();
+    if d0 * d_end < 0.0 && dy.deg >= 2 {
+        let m1 = dy.c[1].abs() - dy.rate_spread(1, e);
+        if m1 > 0.0 || 2.0 * dy.c[2].abs() > dy.rate_spread(2, e) {
+            let r = critical_point(dy, [d0, d_end], e, [m1, tol]);
+            let at = y.eval(r).abs();
+            if at > *peak {
+                *peak = at;
+            }
+            return Ok(());
         }
-        let r = refine(&g, [0.0, g.c[0]], [e, g.eval(e)], tol);
-        let at = y.eval(r).abs();
-        if at > *peak {
-            *peak = at;
-        }
-        return Ok(());
     }
     // The sign of y' just after 0 (y' may start at zero).
     let scale = dy.c[0].abs() + dy_spread;
@@ -266,7 +323,7 @@ fn raise_peak_inside(peak: &mut f64, y: &Poly, e: f64, tol: f64) -> Result<(), U
         return Ok(()); // y is constant
     };
     // y' with the sign it has just after 0; searched past a zero start.
-    let mut g = dy;
+    let mut g = *dy;
     if lead < 0.0 {
         g.negate();
     }
