@@ -79,16 +79,17 @@ pub(super) fn raise_substep_peaks(
     taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
     if let Some(peak) = peak_u {
-        raise_peak_exact(peak, &u, Some(&v), [u_end, u.spread(1.0)], 1.0, tol)?;
+        raise_peak_exact(peak, &u, Some(&v), [u_end, f64::INFINITY], 1.0, tol)?;
+        // (its own spread)
     }
     if let Some(peak) = peak_a {
-        let mut a = u;
+        let a = &mut u; // u done with: the acceleration in its place
         for (ak, vk) in a.c[..=deg].iter_mut().zip(&v.c) {
             *ak = -w2 * *ak - cm * vk;
         }
         a.c[0] += cf;
         a.c[1] += cf_rate * h;
-        raise_peak_exact(peak, &a, None, [a_end, a.spread(1.0)], 1.0, tol)?;
+        raise_peak_exact(peak, a, None, [a_end, f64::INFINITY], 1.0, tol)?;
     }
     Ok(())
 }
@@ -283,7 +284,7 @@ impl Flow {
 /// muted and its peaks taken at its ends (a stretch of `h_fine / 4096`).
 const MAX_SPLIT_DEPTH: u32 = 12;
 
-/// [`raise_peak_exact`] (`rate` a multiple of `y'` or `None`), or the ends only (`ends_only`: a stretch at the
+/// [`raise_peak_exact`], or the ends only (`ends_only`: a stretch at the
 /// deepest split).
 fn raise_peak_over(
     peak: &mut f64,

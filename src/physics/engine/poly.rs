@@ -58,14 +58,14 @@ impl Poly {
         rest.iter().rev().fold(0.0, |y, c| (y + c.abs()) * s)
     }
 
-    /// `Σ_(k > n) k!/(k-n)! |c_k| s^(k-n)` for the `n`-th derivative (1 or
-    /// 2): a bound of `|p^(n)(σ) - p^(n)(0)|` over `[0, s]` (its
-    /// [`Poly::spread`], without building it).
+    /// `Σ_(k > n) k!/(k-n)! |c_k| s^(k-n)`, n = 1 or 2: the [`Poly::spread`]
+    /// of the n-th derivative, a bound of `|p^(n) - p^(n)(0)|` over `[0, s]`.
     pub(super) fn rate_spread(&self, n: usize, s: f64) -> f64 {
-        let mut y = 0.0;
-        for k in (n + 1..self.deg + 1).rev() {
-            let f = if n == 1 { k } else { k * (k - 1) };
-            y = (y + (f as f64 * self.c[k]).abs()) * s;
+        let (mut y, mut k) = (0.0, self.deg as f64);
+        for c in self.c[n + 1..self.deg + 1].iter().rev() {
+            let f = if n == 1 { k } else { k * (k - 1.0) };
+            y = (y + (f * c).abs()) * s;
+            k -= 1.0;
         }
         y
     }
@@ -177,7 +177,7 @@ pub(super) fn first_zero(
             // linear interpolation): a single crossing.
             let falling = -da.max(db) > 0.125 * l * l * m3;
             if l <= tol || falling {
-                return Ok(Some(refine(g, [a, ga], [b, gb], tol)));
+                return Ok(Some(refine(g, [a, ga], [b, gb], [tol, 0.0])));
             }
         }
         width = 0.5 * l;
@@ -188,8 +188,9 @@ pub(super) fn first_zero(
 /// The zero of `g` between `a` (g > 0) and `b` (g <= 0), where it is the
 /// only one: Newton's method kept inside the bracket (bisection when it
 /// leaves it), to well below `tol`; the instant returned is past the zero
-/// by at most `tol`, where `g <= 0`.
-fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f64 {
+/// by at most `tol`, where `g <= 0`. For a peak, `|g(x)| < near = m1 tol`
+/// with `|g'| >= m1` ends it at `x`, within `tol` of the zero.
+fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], [tol, near]: [f64; 2]) -> f64 {
     // The secant, or the middle from a start clamped at zero.
     let mut x = if ga > 0.0 {
         a + ga / (ga - gb) * (b - a)
@@ -201,7 +202,9 @@ fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f
             return b;
         }
         let (gx, dx) = g.eval_d(x);
-        if gx > 0.0 {
+        if gx.abs() < near {
+            return x;
+        } else if gx > 0.0 {
             a = x;
         } else if gx < 0.0 {
             b = x;
@@ -222,37 +225,6 @@ fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f
         x = next;
     }
     b
-}
-
-/// The only zero of `g` in `(0, e)` (`g(0) = g0` and `g(e) = g1` of
-/// opposite signs) to within `tol`, where `|g'| >= m1 > 0` over `[0, e]`,
-/// or (`m1 <= 0`) `g` is convex or concave: its slope at the zero is then
-/// at least `|g(f)| / (b - a)` on a bracket `[a, b]`, `f` its end where `g`
-/// and `g''` differ in sign. Newton's method from the secant, kept inside
-/// the bracket, stopped once `|g(x)|` over that slope is `<= tol` (the
-/// distance to the zero, by the mean value or the chord) or the bracket is
-/// `tol` wide. A peak needs no closer (`PEAK_TOL`).
-fn critical_point(g: &Poly, [g0, g1]: [f64; 2], e: f64, [m1, tol]: [f64; 2]) -> f64 {
-    let [mut a, mut ga, mut b, mut gb] = [0.0, g0, e, g1];
-    let mut x = g0 / (g0 - g1) * e;
-    for _ in 0..100 {
-        let (gx, dx) = g.eval_d(x);
-        let far = if (ga > 0.0) != (g.c[2] > 0.0) { ga } else { gb };
-        let slope = if m1 > 0.0 { m1 } else { far.abs() / (b - a) };
-        if gx.abs() <= slope * tol || b - a <= tol {
-            break;
-        }
-        if (gx > 0.0) == (g0 > 0.0) {
-            (a, ga) = (x, gx);
-        } else {
-            (b, gb) = (x, gx);
-        }
-        x -= gx / dx;
-        if !(x > a && x < b) {
-            x = 0.5 * (a + b);
-        }
-    }
-    x
 }
 
 /// Raises `peak` to the largest `|y|` over `[0, e]`: at the ends (`y_end`
@@ -290,26 +262,23 @@ fn raise_peak_inside(
     e: f64,
     tol: f64,
 ) -> Result<(), Undecided> {
-    let built;
-    let dy = match rate {
-        Some(dy) => dy,
-        None => {
-            built = y.derivative();
-            &built
-        }
-    };
+    let dy = rate.copied().unwrap_or_else(|| y.derivative());
     let dy_spread = dy.spread(e);
     if dy.c[0].abs() > dy_spread {
         return Ok(()); // y' keeps its sign: the ends decide
     }
-    // The common case, one critical point: y' changes sign between the
-    // ends, and over [0, e] either |y''| >= m1 > 0 or y''' keeps its sign
-    // (y' convex or concave: it crosses zero once).
+    // The common case, one critical point: y' changes sign between the ends,
+    // and over [0, e] |y''| >= m1 > 0 or y''' keeps its sign (y' convex or
+    // concave: it crosses zero once).
     let (d0, d_end) = (dy.c[0], dy.eval(e));
     if d0 * d_end < 0.0 && dy.deg >= 2 {
         let m1 = dy.c[1].abs() - dy.rate_spread(1, e);
         if m1 > 0.0 || 2.0 * dy.c[2].abs() > dy.rate_spread(2, e) {
-            let r = critical_point(dy, [d0, d_end], e, [m1, tol]);
+            let mut g = dy;
+            if d0 < 0.0 {
+                g.negate();
+            }
+            let r = refine(&g, [0.0, g.c[0]], [e, g.eval(e)], [tol, m1.max(0.0) * tol]);
             let at = y.eval(r).abs();
             if at > *peak {
                 *peak = at;
@@ -323,7 +292,7 @@ fn raise_peak_inside(
         return Ok(()); // y is constant
     };
     // y' with the sign it has just after 0; searched past a zero start.
-    let mut g = *dy;
+    let mut g = dy;
     if lead < 0.0 {
         g.negate();
     }
@@ -470,7 +439,7 @@ mod tests {
             // (r - s) (1 + a s + b s^2) with the second factor positive on [0, 1].
             let (a, b) = (next() - 0.5, 0.5 * next());
             let g = poly(&[r, r * a - 1.0, r * b - a, -b]);
-            let x = refine(&g, [0.0, g.eval(0.0)], [1.0, g.eval(1.0)], tol);
+            let x = refine(&g, [0.0, g.eval(0.0)], [1.0, g.eval(1.0)], [tol, 0.0]);
             assert!(x >= r - 1e-15 && x <= r + tol, "r {r}: x - r = {:e}", x - r);
             assert!(g.eval(x) <= 0.0, "r {r}: g(x) = {:e}", g.eval(x));
         }
