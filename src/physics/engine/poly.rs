@@ -262,7 +262,7 @@ fn raise_peak_inside(
     e: f64,
     tol: f64,
 ) -> Result<(), Undecided> {
-    let dy = rate.copied().unwrap_or_else(|| y.derivative());
+    let mut dy = rate.copied().unwrap_or_else(|| y.derivative());
     let dy_spread = dy.spread(e);
     if dy.c[0].abs() > dy_spread {
         return Ok(()); // y' keeps its sign: the ends decide
@@ -274,11 +274,11 @@ fn raise_peak_inside(
     if d0 * d_end < 0.0 && dy.deg >= 2 {
         let m1 = dy.c[1].abs() - dy.rate_spread(1, e);
         if m1 > 0.0 || 2.0 * dy.c[2].abs() > dy.rate_spread(2, e) {
-            let mut g = dy;
             if d0 < 0.0 {
-                g.negate();
+                dy.negate(); // (its end values negated exactly too)
             }
-            let r = refine(&g, [0.0, g.c[0]], [e, g.eval(e)], [tol, m1.max(0.0) * tol]);
+            let ends = [[0.0, d0.abs()], [e, -d_end.abs()]];
+            let r = refine(&dy, ends[0], ends[1], [tol, m1.max(0.0) * tol]);
             let at = y.eval(r).abs();
             if at > *peak {
                 *peak = at;
