@@ -78,17 +78,18 @@ pub(super) fn raise_substep_peaks(
     let (mut u, mut v) = (Poly::default(), Poly::default());
     taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
+    // (Spreads `INFINITY`: `raise_peak_exact` takes the polynomials' own.)
     if let Some(peak) = peak_u {
-        raise_peak_exact(peak, &u, [u_end, u.spread(1.0)], 1.0, tol)?;
+        raise_peak_exact(peak, &u, Some(&v), [u_end, f64::INFINITY], 1.0, tol)?;
     }
     if let Some(peak) = peak_a {
-        let mut a = u;
+        let a = &mut u; // u done with: the acceleration in its place
         for (ak, vk) in a.c[..=deg].iter_mut().zip(&v.c) {
             *ak = -w2 * *ak - cm * vk;
         }
         a.c[0] += cf;
         a.c[1] += cf_rate * h;
-        raise_peak_exact(peak, &a, [a_end, a.spread(1.0)], 1.0, tol)?;
+        raise_peak_exact(peak, a, None, [a_end, f64::INFINITY], 1.0, tol)?;
     }
     Ok(())
 }
@@ -288,6 +289,7 @@ const MAX_SPLIT_DEPTH: u32 = 12;
 fn raise_peak_over(
     peak: &mut f64,
     y: &Poly,
+    rate: Option<&Poly>,
     ends: [f64; 2],
     s: f64,
     tol: f64,
@@ -297,7 +299,7 @@ fn raise_peak_over(
         *peak = peak.max(y.c[0].abs()).max(ends[0].abs());
         return Ok(());
     }
-    raise_peak_exact(peak, y, ends, s, tol)
+    raise_peak_exact(peak, y, rate, ends, s, tol)
 }
 
 /// What the search of a stretch found.
@@ -508,6 +510,7 @@ impl Simulator {
         raise_peak_over(
             &mut peak_u0,
             &flow.u,
+            Some(&flow.v),
             [u0, flow.u_spread],
             s,
             peak_tol,
@@ -520,6 +523,7 @@ impl Simulator {
             raise_peak_over(
                 &mut peak_a0,
                 accel,
+                None,
                 [accel_end, spread],
                 s,
                 peak_tol,
@@ -614,7 +618,7 @@ impl Simulator {
                     c[k + 1] += upper[k];
                 }
                 let slip = Poly::new(c, flow.u.deg.max(3));
-                raise_peak_over(peak, &slip, [slip1, spread], s, peak_tol, ends_only)?;
+                raise_peak_over(peak, &slip, None, [slip1, spread], s, peak_tol, ends_only)?;
             }
         } else {
             let tau = if s >= 1.0 { flow.h } else { s * flow.h };

@@ -58,6 +58,18 @@ impl Poly {
         rest.iter().rev().fold(0.0, |y, c| (y + c.abs()) * s)
     }
 
+    /// `Σ_(k > n) k!/(k-n)! |c_k| s^(k-n)`, n = 1 or 2: the [`Poly::spread`]
+    /// of the n-th derivative, a bound of `|p^(n) - p^(n)(0)|` over `[0, s]`.
+    pub(super) fn rate_spread(&self, n: usize, s: f64) -> f64 {
+        let (mut y, mut k) = (0.0, self.deg as f64);
+        for c in self.c[n + 1..self.deg + 1].iter().rev() {
+            let f = if n == 1 { k } else { k * (k - 1.0) };
+            y = (y + (f * c).abs()) * s;
+            k -= 1.0;
+        }
+        y
+    }
+
     pub(super) fn negate(&mut self) {
         for c in &mut self.c[..=self.deg] {
             *c = -*c;
@@ -165,7 +177,7 @@ pub(super) fn first_zero(
             // linear interpolation): a single crossing.
             let falling = -da.max(db) > 0.125 * l * l * m3;
             if l <= tol || falling {
-                return Ok(Some(refine(g, [a, ga], [b, gb], tol)));
+                return Ok(Some(refine(g, [a, ga], [b, gb], [tol, 0.0])));
             }
         }
         width = 0.5 * l;
@@ -176,8 +188,9 @@ pub(super) fn first_zero(
 /// The zero of `g` between `a` (g > 0) and `b` (g <= 0), where it is the
 /// only one: Newton's method kept inside the bracket (bisection when it
 /// leaves it), to well below `tol`; the instant returned is past the zero
-/// by at most `tol`, where `g <= 0`.
-fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f64 {
+/// by at most `tol`, where `g <= 0`. For a peak, `|g(x)| < near = m1 tol`
+/// with `|g'| >= m1` ends it at `x`, within `tol` of the zero.
+fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], [tol, near]: [f64; 2]) -> f64 {
     // The secant, or the middle from a start clamped at zero.
     let mut x = if ga > 0.0 {
         a + ga / (ga - gb) * (b - a)
@@ -189,7 +202,9 @@ fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f
             return b;
         }
         let (gx, dx) = g.eval_d(x);
-        if gx > 0.0 {
+        if gx.abs() < near {
+            return x;
+        } else if gx > 0.0 {
             a = x;
         } else if gx < 0.0 {
             b = x;
@@ -215,11 +230,13 @@ fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], tol: f64) -> f
 /// Raises `peak` to the largest `|y|` over `[0, e]`: at the ends (`y_end`
 /// the value at `e`), or where `y'` changes sign. `spread` bounds
 /// `|y - y(0)|` over `[0, 1]` (`Poly::spread`): when it keeps `|y|` below
-/// the peak, nothing else is computed.
+/// the peak, nothing else is computed. `rate`: a positive multiple of `y'`
+/// when the caller has one (`v` for `u`), else `y'` is built.
 #[inline]
 pub(super) fn raise_peak_exact(
     peak: &mut f64,
     y: &Poly,
+    rate: Option<&Poly>,
     [y_end, spread]: [f64; 2],
     e: f64,
     tol: f64,
@@ -231,34 +248,43 @@ pub(super) fn raise_peak_exact(
     if y.c[0].abs() + spread <= *peak || y.c[0].abs() + y.spread(e) <= *peak {
         return Ok(());
     }
-    raise_peak_inside(peak, y, e, tol)
+    raise_peak_inside(peak, y, rate, e, tol)
 }
 
 /// [`raise_peak_exact`] where its bounds leave an interior peak possible:
 /// out of line, so that the usual case (the bounds decide) is a few
 /// instructions at its callers.
 #[inline(never)]
-fn raise_peak_inside(peak: &mut f64, y: &Poly, e: f64, tol: f64) -> Result<(), Undecided> {
-    let dy = y.derivative();
+fn raise_peak_inside(
+    peak: &mut f64,
+    y: &Poly,
+    rate: Option<&Poly>,
+    e: f64,
+    tol: f64,
+) -> Result<(), Undecided> {
+    let mut dy = rate.copied().unwrap_or_else(|| y.derivative());
     let dy_spread = dy.spread(e);
     if dy.c[0].abs() > dy_spread {
         return Ok(()); // y' keeps its sign: the ends decide
     }
-    // The common case, one critical point: y' changes sign between the
-    // ends and y'' keeps its sign over [0, e], so y' has a single zero.
-    let ddy = dy.derivative();
+    // The common case, one critical point: y' changes sign between the ends,
+    // and over [0, e] |y''| >= m1 > 0 or y''' keeps its sign (y' convex or
+    // concave: it crosses zero once).
     let (d0, d_end) = (dy.c[0], dy.eval(e));
-    if d0 * d_end < 0.0 && ddy.c[0].abs() > ddy.spread(e) {
-        let mut g = dy;
-        if d0 < 0.0 {
-            g.negate();
+    if d0 * d_end < 0.0 && dy.deg >= 2 {
+        let m1 = dy.c[1].abs() - dy.rate_spread(1, e);
+        if m1 > 0.0 || 2.0 * dy.c[2].abs() > dy.rate_spread(2, e) {
+            if d0 < 0.0 {
+                dy.negate(); // (its end values negated exactly too)
+            }
+            let ends = [[0.0, d0.abs()], [e, -d_end.abs()]];
+            let r = refine(&dy, ends[0], ends[1], [tol, m1.max(0.0) * tol]);
+            let at = y.eval(r).abs();
+            if at > *peak {
+                *peak = at;
+            }
+            return Ok(());
         }
-        let r = refine(&g, [0.0, g.c[0]], [e, g.eval(e)], tol);
-        let at = y.eval(r).abs();
-        if at > *peak {
-            *peak = at;
-        }
-        return Ok(());
     }
     // The sign of y' just after 0 (y' may start at zero).
     let scale = dy.c[0].abs() + dy_spread;
@@ -413,7 +439,7 @@ mod tests {
             // (r - s) (1 + a s + b s^2) with the second factor positive on [0, 1].
             let (a, b) = (next() - 0.5, 0.5 * next());
             let g = poly(&[r, r * a - 1.0, r * b - a, -b]);
-            let x = refine(&g, [0.0, g.eval(0.0)], [1.0, g.eval(1.0)], tol);
+            let x = refine(&g, [0.0, g.eval(0.0)], [1.0, g.eval(1.0)], [tol, 0.0]);
             assert!(x >= r - 1e-15 && x <= r + tol, "r {r}: x - r = {:e}", x - r);
             assert!(g.eval(x) <= 0.0, "r {r}: g(x) = {:e}", g.eval(x));
         }
