@@ -67,7 +67,7 @@ typedef struct SllBatchOutputs {
    */
   double nAmbiguous;
   /**
-   * Largest |slip[j]|, interfaces 1..8 (0 beyond nBlocks).
+   * Largest |slip| at interfaces 1..8 (0 beyond nBlocks).
    */
   double peakSlip[8];
 } SllBatchOutputs;

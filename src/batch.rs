@@ -50,7 +50,7 @@ pub struct SllBatchOutputs {
     pub nEvents: f64,
     /// Switches decided by the selection rule.
     pub nAmbiguous: f64,
-    /// Largest |slip\[j\]|, interfaces 1..8 (0 beyond nBlocks).
+    /// Largest |slip| at interfaces 1..8 (0 beyond nBlocks).
     pub peakSlip: [f64; 8],
 }
 
