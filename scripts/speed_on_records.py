@@ -1,7 +1,8 @@
 """The default's speed on every real record in ../shared/ground_motions
 (issue #21: the targets on records the engine was not tuned on).
 
-    python scripts/speed_on_records.py --out DIR [--rounds N]
+    python scripts/speed_on_records.py --out DIR [--rounds N] [--scenes n0 n2 ...]
+                                       [--records NAME ...]
 
 Runs `cargo run --release --example ratio` with RECORDS set to every record
 (its first 20 s) for the bench's scenes: the bare structure, the paper's two
@@ -34,20 +35,25 @@ SCENES = {"n0": ("bare structure", 3), "n2": ("two blocks (paper)", 6),
           "n8": ("8 blocks, mus = muk", 12), "n8s": ("8 blocks, mus > muk (#21)", 12)}
 
 
-def measure(rounds: int) -> list[dict]:
-    paths = sorted(p for p in RECORDS.iterdir() if p.suffix.lower() == ".at2")
+def parse(line: str) -> dict:
+    """One line of `examples/ratio`:
+    "NAME SCENE  x us / floor  y us = r.rrx, k switches, n samples"."""
+    w = line.replace(",", " ").split()
+    return {"record": w[0], "scene": w[1], "engine_us": float(w[2]), "floor_us": float(w[6]),
+            "ratio": float(w[9].rstrip("x")), "switches": int(w[10]), "samples": int(w[12])}
+
+
+def measure(rounds: int, scenes: list[str], names: list[str] | None) -> list[dict]:
+    paths = sorted(p for p in RECORDS.iterdir() if p.suffix.lower() == ".at2"
+                   and (not names or p.stem in names))
     env = dict(os.environ, ROUNDS=str(rounds), REPS="10", RECORDS=":".join(map(str, paths)))
-    cmd = ["cargo", "run", "--quiet", "--release", "--example", "ratio", "--", *SCENES]
+    cmd = ["cargo", "run", "--quiet", "--release", "--example", "ratio", "--", *scenes]
     rows = []
     with subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, text=True) as proc:
         for line in proc.stdout:
-            # "NAME SCENE  x us / floor  y us = r.rrx, k switches, n samples"
-            w = line.replace(",", " ").split()
-            row = {"record": w[0], "scene": w[1], "engine_us": float(w[2]),
-                   "floor_us": float(w[6]), "ratio": float(w[9].rstrip("x")),
-                   "switches": int(w[10]), "samples": int(w[12])}
+            row = parse(line)
             rows.append(row)
-            print(f"[{len(rows):3d}/{len(paths) * len(SCENES)}] {row['record']:30s} {row['scene']:4s} "
+            print(f"[{len(rows):3d}/{len(paths) * len(scenes)}] {row['record']:30s} {row['scene']:4s} "
                   f"{row['ratio']:7.2f}x the floor, {row['switches']} switches", flush=True)
     if proc.returncode:
         sys.exit(f"{' '.join(cmd)} failed")
@@ -58,6 +64,9 @@ def plot(rows: list[dict], path: Path) -> None:
     fig, axes = plt.subplots(2, 2, figsize=(11, 8))
     for ax, (scene, (title, target)) in zip(axes.flat, SCENES.items()):
         pts = [r for r in rows if r["scene"] == scene]
+        if not pts:
+            ax.set_visible(False)
+            continue
         # The bare structure never switches: its cost follows the sampling.
         per_sample = scene == "n0"
         x = [20.0 / r["samples"] if per_sample else 1000 * r["switches"] / r["samples"]
@@ -81,9 +90,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--rounds", type=int, default=7)
+    ap.add_argument("--scenes", nargs="+", choices=list(SCENES), default=list(SCENES))
+    ap.add_argument("--records", nargs="+", metavar="NAME",
+                    help="record file names without extension (default: all)")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    rows = measure(args.rounds)
+    rows = measure(args.rounds, args.scenes, args.records)
+    if not rows:
+        sys.exit("no record measured (check --records against ../shared/ground_motions)")
     with open(args.out / "speed_on_records.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
