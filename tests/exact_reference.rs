@@ -263,3 +263,94 @@ fn the_default_is_exact_at_any_max_step() {
     assert!((a.up - b.up).abs() < 1e-11 * a.peak_up, "{} {}", a.up, b.up);
     assert!((a.peak_slip[0] - b.peak_slip[0]).abs() < 1e-11 * a.peak_up);
 }
+
+/// A record resampled at `dt` (every k-th sample).
+fn decimated(gm: &GroundMotion, dt: f64) -> GroundMotion {
+    let d0 = gm.time[1] - gm.time[0];
+    let k = ((dt / d0).round() as usize).max(1);
+    GroundMotion::uniform(d0 * k as f64, gm.accel.iter().step_by(k).copied().collect())
+}
+
+#[test]
+fn the_bare_structures_energy_runs_miss_no_peak_on_coarse_records() {
+    // The sweep's energy runs take a bare structure's substeps where an
+    // energy bound proves no new peak of |u0| or |A0| (sweep.rs,
+    // `proofs::energy_run`). Real records resampled at 0.02 s (the runs'
+    // hardest case: long substeps), periods from 0.01 to 100 s, damping
+    // from 0 to 0.999, a held Fext with rare jumps and ramps (which end a
+    // run). Expected: the peaks and final state of the exact reference
+    // (1e-9, as above), and the same as one `advance` per piece, which
+    // takes no run (1e-10 of the peaks).
+    let mut rng = Rng(0x0e4e_5105);
+    let names = [
+        "ARL360.at2",
+        "RSN1106_KOBE_KJM000.AT2",
+        "Rinaldi228.AT2",
+        "CHY028-N.AT2",
+    ];
+    let mut worst = 0.0f64;
+    for name in names {
+        let gm = truncate(&decimated(&read_shared(name, 9.81), 0.02), 12.0);
+        for zeta in [0.0, 0.05, 0.5, 0.999] {
+            let p = Params {
+                n_blocks: 0,
+                tp: 10f64.powf(rng.uniform(-2.0, 2.0)),
+                zeta,
+                mp: rng.uniform(0.5, 5.0),
+                ..Params::default()
+            };
+            let mut fext = rng.uniform(-3.0, 3.0) * p.mp;
+            let mut pieces = vec![];
+            for k in 0..gm.time.len() - 1 {
+                let (t_end, e) = record_piece(&gm, k);
+                let x = rng.next_f64();
+                if x < 0.01 {
+                    fext = rng.uniform(-3.0, 3.0) * p.mp;
+                }
+                let fext_rate = if (0.01..0.02).contains(&x) {
+                    rng.uniform(-20.0, 20.0) * p.mp
+                } else {
+                    0.0
+                };
+                pieces.push(InputPiece {
+                    t_end,
+                    ag: e.ag,
+                    ag_rate: e.ag_rate,
+                    fext,
+                    fext_rate,
+                });
+                fext += fext_rate * (t_end - gm.time[k]);
+            }
+            let excitation = |q: &InputPiece| Excitation {
+                ag: q.ag,
+                ag_rate: q.ag_rate,
+                fext: q.fext,
+                fext_rate: q.fext_rate,
+            };
+            let mut one_call = Simulator::new(&p, &Settings::default()).unwrap();
+            one_call
+                .advance_pieces(pieces.iter().map(|q| (q.t_end, excitation(q))))
+                .unwrap();
+            let mut each = Simulator::new(&p, &Settings::default()).unwrap();
+            for q in &pieces {
+                each.advance(q.t_end, &excitation(q)).unwrap();
+            }
+            let exact = Exact::new(&p).run_pieces(0.0, &pieces, 16);
+            let (a, b) = (one_call.outputs(), each.outputs());
+            let what = format!("{name}, Tp {:.3} s, zeta {zeta}", p.tp);
+            let to_exact =
+                rel(a.peak_up, exact.peak_u0).max((a.up - exact.u[0]).abs() / exact.peak_u0);
+            let to_each = rel(a.peak_up, b.peak_up).max(rel(a.peak_ap_abs, b.peak_ap_abs));
+            assert!(
+                to_exact < 1e-9,
+                "{what}: {to_exact:e} from the exact reference"
+            );
+            assert!(
+                to_each < 1e-10,
+                "{what}: {to_each:e} from one call per piece"
+            );
+            worst = worst.max(to_exact);
+        }
+    }
+    println!("worst against the exact reference {worst:.1e}");
+}
