@@ -900,6 +900,39 @@ pub fn record_pieces(
         .collect()
 }
 
+/// A stack on a prescribed support against the reference: slips, peak
+/// slips, displacements and energies (1e-9 of their scales); returns the
+/// worst relative difference.
+pub fn compare_on_support(o: &stacked_live_load::Outputs, exact: &ExactResult, label: &str) -> f64 {
+    let n = exact.peak_slip.len();
+    let mut worst = 0.0f64;
+    let scale_u = exact.u.iter().fold(1e-6f64, |m, x| m.max(x.abs()));
+    for j in 0..n {
+        worst = worst.max(rel_slip(o.peak_slip[j], exact.peak_slip[j]));
+        let slip = exact.u[j + 1] - exact.u[j];
+        worst = worst.max((o.slip[j] - slip).abs() / scale_u);
+        worst = worst.max((o.ub[j] - exact.u[j + 1]).abs() / scale_u);
+    }
+    let scale_e = exact.e_input.abs().max(1e-9);
+    worst = worst.max((o.e_input - exact.e_input).abs() / scale_e);
+    for j in 0..n {
+        worst = worst.max((o.e_friction_of[j] - exact.e_friction[j]).abs() / scale_e);
+    }
+    assert!(
+        worst < 1e-9,
+        "{label}: differs from the exact reference by {worst:.2e}\n engine {:?} {} {:?}\n exact {:?} {} {:?}",
+        &o.peak_slip[..n],
+        o.e_input,
+        &o.e_friction_of[..n],
+        exact.peak_slip,
+        exact.e_input,
+        exact.e_friction
+    );
+    // The support's drift from the input frame (0 without mobility).
+    worst = worst.max((o.up - exact.u[0]).abs() / scale_u);
+    worst
+}
+
 /// The benchmarks' stacks (`benches/frontier.rs`, `examples/scaling.rs`):
 /// the paper's two blocks (`Params::default`), and above them lighter, less
 /// rough blocks, friction falling upwards but never equal to the one below
