@@ -513,10 +513,11 @@ fn checked_pieces_promise_only_pieces_of_a_records_shape() {
     // `CheckedPieces` (the source of `advance_pieces`) gives through
     // `continuing` only a piece as long as the last one given by
     // `next_piece` (up to the rounding of the times), with `Fext` held at
-    // its value and zero rate, every value finite and, where asked, `ag`
-    // without a jump; any other piece waits for `next_piece` (expected:
+    // its value and zero rate, every value finite and, on a prescribed
+    // support, `ag` without a jump; any other piece waits for `next_piece` (expected:
     // exactly the breaks built in below).
     use stacked_live_load::physics::engine::{CheckedPieces, PieceSource};
+    use stacked_live_load::physics::system::System;
     let piece = |t_end: f64, ag: f64, ag_rate: f64, fext: f64, fext_rate: f64| {
         let exc = Excitation {
             ag,
@@ -546,7 +547,13 @@ fn checked_pieces_promise_only_pieces_of_a_records_shape() {
         ),
         ("t_end NaN", piece(f64::NAN, 3.0, 100.0, 5.0, 0.0), false),
     ];
-    for ag_continuous in [false, true] {
+    let structure = System::new(&Params::default()).unwrap();
+    let support = System::new(&Params {
+        support: Support::Prescribed,
+        ..Params::default()
+    })
+    .unwrap();
+    for (sys, ag_continuous) in [(&structure, false), (&support, true)] {
         let mut all = cases.clone();
         all.push((
             "ag jumps",
@@ -555,7 +562,7 @@ fn checked_pieces_promise_only_pieces_of_a_records_shape() {
         ));
         for (what, next, promised) in all {
             let pieces = vec![shape(0), shape(1), next, shape(3)];
-            let mut source = CheckedPieces::new(pieces.into_iter(), ag_continuous);
+            let mut source = CheckedPieces::new(pieces.into_iter(), sys);
             assert_eq!(source.next_piece(), Some(shape(0)));
             // No promise before the source knows a piece's length.
             assert_eq!(source.promised(), 0, "{what}");

@@ -337,8 +337,9 @@ impl PieceSource for RecordPieces<'_> {
         let i = self.next_sample + k;
         let ([t0, t1], [a0, a1]) = (pair(self.time, i), pair(self.accel, i));
         let exc = self.excitation(t0, a0, (a1 - a0) * self.inv_dt);
-        // As `Excitation::check` (Fext is finite by the promise): `x - x`
-        // is 0 where `x` is finite, NaN where not.
+        // `engine::finite_terms` (Fext is finite by the promise), written
+        // out: calling it moved the sample loop's code, +1.7 % instructions
+        // on the bare structure.
         let sum = exc.ag + exc.ag_rate + t1;
         if sum - sum != 0.0 {
             return None;

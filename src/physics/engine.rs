@@ -49,8 +49,8 @@ mod sweep;
 pub(crate) use bodies::{move_bodies, upper_cluster_step};
 use pieces::Piece;
 pub use pieces::{
-    same_up_to_rounding, substeps, CheckedPieces, Excitation, PieceSource, Plain, EVENT_TIME_TOL,
-    FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
+    finite_terms, same_up_to_rounding, substeps, CheckedPieces, Excitation, PieceSource, Plain,
+    EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,
 };
 pub use proofs::PRESCRIBED_MAX_STEP;
 pub use report::{Outputs, SimError, Stats};
@@ -334,8 +334,7 @@ impl Simulator {
         &mut self,
         pieces: impl IntoIterator<Item = (f64, Excitation)>,
     ) -> Result<(), SimError> {
-        let ag_continuous = self.sys.prescribed();
-        self.advance_source(CheckedPieces::new(pieces.into_iter(), ag_continuous))
+        self.advance_source(CheckedPieces::new(pieces.into_iter(), &self.sys))
     }
 
     /// [`Simulator::advance_pieces`] from a [`PieceSource`] (a record's

@@ -28,10 +28,10 @@ impl Excitation {
     /// every value finite and time not going back.
     #[inline]
     pub fn check(&self, now: f64, t_end: f64) -> Result<(), SimError> {
-        // A finite sum means every value is finite. A sum that is not (a
-        // bad value, or finite ones overflowing) goes to the detailed check.
+        // A sum that is not finite (a bad value, or finite ones
+        // overflowing) goes to the detailed check.
         let sum = self.ag + self.ag_rate + self.fext + self.fext_rate + t_end;
-        if sum.is_finite() && t_end >= now {
+        if finite_terms(sum) && t_end >= now {
             return Ok(());
         }
         self.check_each(now, t_end)
@@ -123,15 +123,14 @@ pub struct CheckedPieces<I> {
 }
 
 impl<I: Iterator> CheckedPieces<I> {
-    /// The pieces of `pieces` up to its first `None`, the first to be
-    /// checked in full; with `ag_continuous` (needed on a prescribed
-    /// support, where a jump of `ag` moves the support) a jump of `ag`
-    /// breaks the promise.
-    pub fn new(pieces: I, ag_continuous: bool) -> CheckedPieces<I> {
+    /// The pieces of `pieces` up to its first `None` for a scene of `sys`,
+    /// the first to be checked in full; on a prescribed support a jump of
+    /// `ag` breaks the promise (it moves the support).
+    pub fn new(pieces: I, sys: &System) -> CheckedPieces<I> {
         CheckedPieces {
             pieces: pieces.fuse(),
             waiting: None,
-            ag_continuous,
+            ag_continuous: sys.prescribed(),
             end: f64::NAN,
             length: f64::NAN,
             fext: f64::NAN,
@@ -152,7 +151,7 @@ impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for CheckedPieces<I> {
         } else {
             f64::NAN
         };
-        self.ag_end = exc.ag + exc.ag_rate * length;
+        self.ag_end = exc.at(length).0;
         Some((t_end, exc))
     }
 
@@ -166,25 +165,22 @@ impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for CheckedPieces<I> {
     }
 
     #[inline(always)]
-    #[allow(clippy::eq_op)] // `sum - sum`: a finiteness test
     fn continuing(&mut self, _k: usize) -> Option<(f64, f64, f64)> {
         if self.waiting.is_some() {
             return None;
         }
         let (t_end, exc) = self.pieces.next()?;
-        // Later, as long as the last up to rounding, Fext held, every value
-        // finite (`x - x` is 0 where `x` is finite), and where it matters
-        // `ag` without a jump.
+        // As long as the last up to rounding, Fext held, every value
+        // finite, and where it matters `ag` without a jump.
         let sum = exc.ag + exc.ag_rate + t_end;
         if exc.fext == self.fext
             && exc.fext_rate == 0.0
-            && sum - sum == 0.0
-            && t_end > self.end
-            && same_up_to_rounding(t_end - self.end, self.length, t_end)
+            && finite_terms(sum)
+            && continues_as_long(self.end, t_end, self.length)
             && !(self.ag_continuous && is_jump(exc.ag, self.ag_end))
         {
             if self.ag_continuous {
-                self.ag_end = exc.ag + exc.ag_rate * (t_end - self.end);
+                self.ag_end = exc.at(t_end - self.end).0;
             }
             self.end = t_end;
             return Some((t_end, exc.ag, exc.ag_rate));
@@ -233,7 +229,7 @@ impl Piece {
     /// this one's substeps.
     #[inline(always)]
     pub(super) fn same_length(&self, t_ref: f64, t_end: f64) -> bool {
-        self.n > 0 && same_up_to_rounding(t_end - t_ref, self.t_end - self.t_ref, t_end)
+        self.n > 0 && continues_as_long(t_ref, t_end, self.t_end - self.t_ref)
     }
 
     /// End time of substep `i` (the last one ends exactly at `t_end`).
@@ -266,6 +262,23 @@ pub const MAX_EVENTS_PER_STEP: u32 = 64;
 #[inline(always)]
 pub fn same_up_to_rounding(length: f64, other: f64, t_end: f64) -> bool {
     (length - other).abs() <= 1e-15 * (t_end.abs() + other)
+}
+
+/// Whether the terms of `sum` were all finite (a sum that is not: a bad
+/// value, or finite ones overflowing): `x - x` is 0 exactly where `x` is
+/// finite, one subtraction.
+#[inline(always)]
+#[allow(clippy::eq_op)]
+pub fn finite_terms(sum: f64) -> bool {
+    sum - sum == 0.0
+}
+
+/// Whether a piece from `t_start` to `t_end` goes forward and is as long as
+/// `other` up to the rounding of the times (a piece of a few ulps must not
+/// pass for the next when it is empty or goes back).
+#[inline(always)]
+fn continues_as_long(t_start: f64, t_end: f64, other: f64) -> bool {
+    t_end > t_start && same_up_to_rounding(t_end - t_start, other, t_end)
 }
 
 /// Whether `Fext` moving from `before` to `after` at an instant is a jump

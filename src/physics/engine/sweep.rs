@@ -277,7 +277,7 @@ impl Simulator {
                         pending = Some((t_end, exc));
                         break;
                     }
-                    if t_end > t0 && cur.same_length(t0, t_end) {
+                    if cur.same_length(t0, t_end) {
                         // A record's next sample: the same substeps, map and rows.
                         (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
                     } else {
