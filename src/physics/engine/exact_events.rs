@@ -78,9 +78,9 @@ pub(super) fn raise_substep_peaks(
     let (mut u, mut v) = (Poly::default(), Poly::default());
     taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
-    // (Spreads `INFINITY`: `raise_peak_exact` takes the polynomials' own.)
+    // (The driver's bounds have failed: the search at once.)
     if let Some(peak) = peak_u {
-        raise_peak_exact(peak, &u, Some(&v), [u_end, f64::INFINITY], 1.0, tol)?;
+        raise_peak_searched(peak, &u, Some(&v), u_end, tol)?;
     }
     if let Some(peak) = peak_a {
         let a = &mut u; // u done with: the acceleration in its place
@@ -89,7 +89,7 @@ pub(super) fn raise_substep_peaks(
         }
         a.c[0] += cf;
         a.c[1] += cf_rate * h;
-        raise_peak_exact(peak, a, None, [a_end, f64::INFINITY], 1.0, tol)?;
+        raise_peak_searched(peak, a, None, a_end, tol)?;
     }
     Ok(())
 }

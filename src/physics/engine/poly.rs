@@ -241,14 +241,32 @@ pub(super) fn raise_peak_exact(
     e: f64,
     tol: f64,
 ) -> Result<(), Undecided> {
-    let ends = y.c[0].abs().max(y_end.abs());
-    if ends > *peak {
-        *peak = ends;
-    }
+    raise_to_ends(peak, y, y_end);
     if y.c[0].abs() + spread <= *peak || y.c[0].abs() + y.spread(e) <= *peak {
         return Ok(());
     }
     raise_peak_inside(peak, y, rate, e, tol)
+}
+
+/// [`raise_peak_exact`] without its bounds first, for a caller whose own
+/// bounds have already failed to exclude an interior peak.
+pub(super) fn raise_peak_searched(
+    peak: &mut f64,
+    y: &Poly,
+    rate: Option<&Poly>,
+    y_end: f64,
+    tol: f64,
+) -> Result<(), Undecided> {
+    raise_to_ends(peak, y, y_end);
+    raise_peak_inside(peak, y, rate, 1.0, tol)
+}
+
+#[inline(always)]
+fn raise_to_ends(peak: &mut f64, y: &Poly, y_end: f64) {
+    let ends = y.c[0].abs().max(y_end.abs());
+    if ends > *peak {
+        *peak = ends;
+    }
 }
 
 /// [`raise_peak_exact`] where its bounds leave an interior peak possible:
@@ -262,23 +280,30 @@ fn raise_peak_inside(
     e: f64,
     tol: f64,
 ) -> Result<(), Undecided> {
-    let mut dy = rate.copied().unwrap_or_else(|| y.derivative());
-    let dy_spread = dy.spread(e);
-    if dy.c[0].abs() > dy_spread {
-        return Ok(()); // y' keeps its sign: the ends decide
-    }
-    // The common case, one critical point: y' changes sign between the ends,
-    // and over [0, e] |y''| >= m1 > 0 or y''' keeps its sign (y' convex or
-    // concave: it crosses zero once).
+    let derivative;
+    let dy = match rate {
+        Some(rate) => rate,
+        None => {
+            derivative = y.derivative();
+            &derivative
+        }
+    };
+    // The common case first, one critical point: y' changes sign between
+    // the ends, and over [0, e] |y''| >= m1 > 0 or y''' keeps its sign (y'
+    // convex or concave: it crosses zero once).
     let (d0, d_end) = (dy.c[0], dy.eval(e));
     if d0 * d_end < 0.0 && dy.deg >= 2 {
         let m1 = dy.c[1].abs() - dy.rate_spread(1, e);
         if m1 > 0.0 || 2.0 * dy.c[2].abs() > dy.rate_spread(2, e) {
-            if d0 < 0.0 {
-                dy.negate(); // (its end values negated exactly too)
-            }
             let ends = [[0.0, d0.abs()], [e, -d_end.abs()]];
-            let r = refine(&dy, ends[0], ends[1], [tol, m1.max(0.0) * tol]);
+            let near = m1.max(0.0) * tol;
+            let r = if d0 > 0.0 {
+                refine(dy, ends[0], ends[1], [tol, near])
+            } else {
+                let mut g = *dy;
+                g.negate(); // (its end values negated exactly too)
+                refine(&g, ends[0], ends[1], [tol, near])
+            };
             let at = y.eval(r).abs();
             if at > *peak {
                 *peak = at;
@@ -286,13 +311,17 @@ fn raise_peak_inside(
             return Ok(());
         }
     }
+    let dy_spread = dy.spread(e);
+    if dy.c[0].abs() > dy_spread {
+        return Ok(()); // y' keeps its sign: the ends decide
+    }
     // The sign of y' just after 0 (y' may start at zero).
     let scale = dy.c[0].abs() + dy_spread;
     let Some(&lead) = dy.coefs().iter().find(|x| x.abs() > 1e-12 * scale) else {
         return Ok(()); // y is constant
     };
     // y' with the sign it has just after 0; searched past a zero start.
-    let mut g = dy;
+    let mut g = *dy;
     if lead < 0.0 {
         g.negate();
     }
