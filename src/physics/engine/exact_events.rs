@@ -80,7 +80,7 @@ pub(super) fn raise_substep_peaks(
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
     // (The driver's bounds have failed: the search at once.)
     if let Some(peak) = peak_u {
-        raise_peak_searched(peak, &u, Some(&v), u_end, tol)?;
+        raise_peak_inside(peak, &u, Some(&v), u_end, 1.0, tol)?;
     }
     if let Some(peak) = peak_a {
         let a = &mut u; // u done with: the acceleration in its place
@@ -89,7 +89,7 @@ pub(super) fn raise_substep_peaks(
         }
         a.c[0] += cf;
         a.c[1] += cf_rate * h;
-        raise_peak_searched(peak, a, None, a_end, tol)?;
+        raise_peak_inside(peak, a, None, a_end, 1.0, tol)?;
     }
     Ok(())
 }

@@ -241,45 +241,31 @@ pub(super) fn raise_peak_exact(
     e: f64,
     tol: f64,
 ) -> Result<(), Undecided> {
-    raise_to_ends(peak, y, y_end);
-    if y.c[0].abs() + spread <= *peak || y.c[0].abs() + y.spread(e) <= *peak {
+    let ends = y.c[0].abs().max(y_end.abs());
+    let least = if ends > *peak { ends } else { *peak };
+    if y.c[0].abs() + spread <= least || y.c[0].abs() + y.spread(e) <= least {
+        *peak = least;
         return Ok(());
     }
-    raise_peak_inside(peak, y, rate, e, tol)
+    raise_peak_inside(peak, y, rate, y_end, e, tol)
 }
 
-/// [`raise_peak_exact`] without its bounds first, for a caller whose own
-/// bounds have already failed to exclude an interior peak.
-pub(super) fn raise_peak_searched(
+/// [`raise_peak_exact`] where its bounds leave an interior peak possible,
+/// or at once for a caller whose own bounds have: out of line, so that the
+/// usual case (the bounds decide) is a few instructions at its callers.
+#[inline(never)]
+pub(super) fn raise_peak_inside(
     peak: &mut f64,
     y: &Poly,
     rate: Option<&Poly>,
     y_end: f64,
+    e: f64,
     tol: f64,
 ) -> Result<(), Undecided> {
-    raise_to_ends(peak, y, y_end);
-    raise_peak_inside(peak, y, rate, 1.0, tol)
-}
-
-#[inline(always)]
-fn raise_to_ends(peak: &mut f64, y: &Poly, y_end: f64) {
     let ends = y.c[0].abs().max(y_end.abs());
     if ends > *peak {
         *peak = ends;
     }
-}
-
-/// [`raise_peak_exact`] where its bounds leave an interior peak possible:
-/// out of line, so that the usual case (the bounds decide) is a few
-/// instructions at its callers.
-#[inline(never)]
-fn raise_peak_inside(
-    peak: &mut f64,
-    y: &Poly,
-    rate: Option<&Poly>,
-    e: f64,
-    tol: f64,
-) -> Result<(), Undecided> {
     let derivative;
     let dy = match rate {
         Some(rate) => rate,
