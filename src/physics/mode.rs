@@ -660,17 +660,26 @@ fn cluster_law(
 /// it (inlined: the proofs take it at every stick).
 #[inline(always)]
 fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
-    let bottom = (1..j).rev().find(|&i| !mode.is_stuck(i)).unwrap_or(0);
-    let end = (j + 1..sys.n + 1)
-        .find(|&i| !mode.is_stuck(i))
-        .unwrap_or(sys.n + 1);
-    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
+    let (accel, end) = body_accel(sys, mode, load0, j);
     let f_top = if end <= sys.n {
         -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
     } else {
         0.0
     };
     sys.mass_down[j][end] * accel + f_top
+}
+
+/// The absolute acceleration of the cluster of `mode` that holds body `i`,
+/// by [`cluster_law`] (as [`Dynamics::accel`] has it), and the interface
+/// above that cluster.
+#[inline(always)]
+fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize) -> (f64, usize) {
+    let bottom = (1..i + 1).rev().find(|&k| !mode.is_stuck(k)).unwrap_or(0);
+    let end = (i + 1..sys.n + 1)
+        .find(|&k| !mode.is_stuck(k))
+        .unwrap_or(sys.n + 1);
+    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
+    (accel, end)
 }
 
 /// What the resolution is asked to decide.
@@ -875,7 +884,6 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
 /// least `(muk N - |F|)²` (a stick slipping), `(2 muk N)²` (a slip reversing)
 /// or `M r² min(m_i, m_(i-1)) / 2` (a slip sticking): each twice the bound.
 fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking: bool) -> bool {
-    let d = sticking.then(|| Dynamics::clusters(sys, mode));
     let (eps, mass) = (CONSISTENCY_TOL, sys.mass_up[1][sys.n + 1]);
     let (mut bound, mut need) = (0.0, f64::INFINITY);
     (1..sys.n + 1).filter(|&j| ifaces & (1 << j) != 0).all(|j| {
@@ -884,8 +892,10 @@ fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking:
         need = need.min(if mode.is_stuck(j) {
             let margin = (k - stuck_force(sys, mode, load0, j).abs()).max(0.0);
             margin * margin
-        } else if let Some(d) = &d {
-            let r = (mode.contact[j].slip_sign() * d.rel_accel(j, load0)).max(0.0);
+        } else if sticking {
+            // Its relative acceleration: only the two clusters it separates.
+            let rel = body_accel(sys, mode, load0, j).0 - body_accel(sys, mode, load0, j - 1).0;
+            let r = (mode.contact[j].slip_sign() * rel).max(0.0);
             bound += (sys.mus[j] * sys.normal[j] * (1.0 + eps) - k) * r;
             (4.0 * k * k).min(0.5 * sys.mass[j].min(sys.mass[j - 1]) * mass * r * r)
         } else {
