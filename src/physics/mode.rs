@@ -660,13 +660,34 @@ fn cluster_law(
 /// it (inlined: the proofs take it at every stick).
 #[inline(always)]
 fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
-    let (accel, end) = body_accel(sys, mode, load0, j);
-    let f_top = if end <= sys.n {
-        -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
-    } else {
-        0.0
-    };
-    sys.mass_down[j][end] * accel + f_top
+    StuckForces::default().at(sys, mode, load0, j)
+}
+
+/// [`stuck_force`] along one walk up the stack (interfaces in increasing
+/// order, one mode): each cluster's acceleration is taken once for all its
+/// interfaces, not once per interface.
+#[derive(Default)]
+struct StuckForces {
+    /// The interface above the last cluster met (0: none yet), its
+    /// acceleration.
+    end: usize,
+    accel: f64,
+}
+
+impl StuckForces {
+    #[inline(always)]
+    fn at(&mut self, sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
+        if j >= self.end {
+            (self.accel, self.end) = body_accel(sys, mode, load0, j);
+        }
+        let end = self.end;
+        let f_top = if end <= sys.n {
+            -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
+        } else {
+            0.0
+        };
+        sys.mass_down[j][end] * self.accel + f_top
+    }
 }
 
 /// The absolute acceleration of the cluster of `mode` that holds body `i`,
@@ -761,8 +782,9 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             return only_consistent(sys, &mode, zero, req.load0, true).then_some(res);
         }
         let (mut j, mut x) = (0, 1.0f64);
+        let mut forces = StuckForces::default();
         for i in ifaces().filter(|&i| mode.is_stuck(i)) {
-            let f = stuck_force(sys, &mode, req.load0, i) / (sys.mus[i] * sys.normal[i]);
+            let f = forces.at(sys, &mode, req.load0, i) / (sys.mus[i] * sys.normal[i]);
             (j, x) = if f.abs() > x.abs() { (i, f) } else { (j, x) };
         }
         (j > 0).then_some(())?;
@@ -886,11 +908,12 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
 fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking: bool) -> bool {
     let (eps, mass) = (CONSISTENCY_TOL, sys.mass_up[1][sys.n + 1]);
     let (mut bound, mut need) = (0.0, f64::INFINITY);
+    let mut forces = StuckForces::default();
     (1..sys.n + 1).filter(|&j| ifaces & (1 << j) != 0).all(|j| {
         let k = sys.muk[j] * sys.normal[j];
         bound += 4.0 * k * eps * sys.g;
         need = need.min(if mode.is_stuck(j) {
-            let margin = (k - stuck_force(sys, mode, load0, j).abs()).max(0.0);
+            let margin = (k - forces.at(sys, mode, load0, j).abs()).max(0.0);
             margin * margin
         } else if sticking {
             // Its relative acceleration: only the two clusters it separates.
