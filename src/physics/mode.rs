@@ -660,47 +660,43 @@ fn cluster_law(
 /// it (inlined: the proofs take it at every stick).
 #[inline(always)]
 fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
-    StuckForces::default().at(sys, mode, load0, j)
+    stuck_force_after(sys, mode, load0, j, &mut (0, 0.0))
 }
 
-/// [`stuck_force`] along one walk up the stack (interfaces in increasing
-/// order, one mode): each cluster's acceleration is taken once for all its
-/// interfaces, not once per interface.
-#[derive(Default)]
-struct StuckForces {
-    /// The interface above the last cluster met (0: none yet), its
-    /// acceleration.
-    end: usize,
-    accel: f64,
-}
-
-impl StuckForces {
-    #[inline(always)]
-    fn at(&mut self, sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
-        if j >= self.end {
-            (self.accel, self.end) = body_accel(sys, mode, load0, j);
-        }
-        let end = self.end;
-        let f_top = if end <= sys.n {
-            -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
-        } else {
-            0.0
-        };
-        sys.mass_down[j][end] * self.accel + f_top
+/// [`stuck_force`] along a walk up the stack of one mode: `last`, the
+/// interface above the last cluster met and its acceleration, spares taking
+/// a cluster's acceleration again for each of its interfaces.
+#[inline(always)]
+fn stuck_force_after(
+    sys: &System,
+    mode: &Mode,
+    load0: f64,
+    j: usize,
+    last: &mut (usize, f64),
+) -> f64 {
+    if j >= last.0 {
+        *last = body_accel(sys, mode, load0, j);
     }
+    let (end, accel) = *last;
+    let f_top = if end <= sys.n {
+        -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
+    } else {
+        0.0
+    };
+    sys.mass_down[j][end] * accel + f_top
 }
 
 /// The absolute acceleration of the cluster of `mode` that holds body `i`,
-/// by [`cluster_law`] (as [`Dynamics::accel`] has it), and the interface
+/// by [`cluster_law`] (as [`Dynamics::accel`] has it), after the interface
 /// above that cluster.
 #[inline(always)]
-fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize) -> (f64, usize) {
+fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize) -> (usize, f64) {
     let bottom = (1..i + 1).rev().find(|&k| !mode.is_stuck(k)).unwrap_or(0);
     let end = (i + 1..sys.n + 1)
         .find(|&k| !mode.is_stuck(k))
         .unwrap_or(sys.n + 1);
     let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
-    (accel, end)
+    (end, accel)
 }
 
 /// What the resolution is asked to decide.
@@ -782,9 +778,10 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             return only_consistent(sys, &mode, zero, req.load0, true).then_some(res);
         }
         let (mut j, mut x) = (0, 1.0f64);
-        let mut forces = StuckForces::default();
+        let mut last = (0, 0.0);
         for i in ifaces().filter(|&i| mode.is_stuck(i)) {
-            let f = forces.at(sys, &mode, req.load0, i) / (sys.mus[i] * sys.normal[i]);
+            let f = stuck_force_after(sys, &mode, req.load0, i, &mut last);
+            let f = f / (sys.mus[i] * sys.normal[i]);
             (j, x) = if f.abs() > x.abs() { (i, f) } else { (j, x) };
         }
         (j > 0).then_some(())?;
@@ -908,16 +905,16 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
 fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking: bool) -> bool {
     let (eps, mass) = (CONSISTENCY_TOL, sys.mass_up[1][sys.n + 1]);
     let (mut bound, mut need) = (0.0, f64::INFINITY);
-    let mut forces = StuckForces::default();
+    let mut last = (0, 0.0);
     (1..sys.n + 1).filter(|&j| ifaces & (1 << j) != 0).all(|j| {
         let k = sys.muk[j] * sys.normal[j];
         bound += 4.0 * k * eps * sys.g;
         need = need.min(if mode.is_stuck(j) {
-            let margin = (k - forces.at(sys, mode, load0, j).abs()).max(0.0);
+            let margin = (k - stuck_force_after(sys, mode, load0, j, &mut last).abs()).max(0.0);
             margin * margin
         } else if sticking {
             // Its relative acceleration: only the two clusters it separates.
-            let rel = body_accel(sys, mode, load0, j).0 - body_accel(sys, mode, load0, j - 1).0;
+            let rel = body_accel(sys, mode, load0, j).1 - body_accel(sys, mode, load0, j - 1).1;
             let r = (mode.contact[j].slip_sign() * rel).max(0.0);
             bound += (sys.mus[j] * sys.normal[j] * (1.0 + eps) - k) * r;
             (4.0 * k * k).min(0.5 * sys.mass[j].min(sys.mass[j - 1]) * mass * r * r)
