@@ -266,8 +266,8 @@ impl Dynamics {
         d
     }
 
-    /// The clusters, masses and forces of `mode` only (what the contact law
-    /// needs), without its guards: for the candidate modes of a resolution.
+    /// The clusters, masses and forces of `mode` only, without its guards
+    /// (the part [`cluster_law`] follows operation for operation).
     pub fn clusters(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics {
             n_clusters: 0,
