@@ -872,7 +872,8 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 
 /// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
 /// [`only_consistent`] covers every rival (one slip: all but `mode` with it stuck, checked;
-/// a free interface in `zero` fails it), else the walk's.
+/// a free interface in `zero` fails it), else whether the walk without its bound finds a
+/// second consistent assignment (the best is known: the bounded walk is not needed).
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
     let (zero, slips) = (req.zero, req.zero & req.must_break);
     let proved = equal
@@ -890,8 +891,8 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
             _ => false,
         };
     (!proved)
-        .then(|| resolve_by_walk(sys, req))
-        .map_or((false, 0), |r| (r.ambiguous, r.tries))
+        .then(|| Walk::new(sys, req).search(false, 2))
+        .map_or((false, 0), |all| (all.count > 1, all.tries))
 }
 
 /// Whether no consistent assignment differs from `mode` at `ifaces` by
