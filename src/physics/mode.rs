@@ -891,8 +891,15 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
             _ => false,
         };
     (!proved)
-        .then(|| Walk::new(sys, req).search(false, 2))
+        .then(|| second_consistent(sys, req))
         .map_or((false, 0), |all| (all.count > 1, all.tries))
+}
+
+/// The walk without its bound, stopped at a second consistent assignment
+/// (out of line, as [`resolve_by_walk`]).
+#[inline(never)]
+fn second_consistent(sys: &System, req: &ResolveRequest) -> Search {
+    Walk::new(sys, req).search(false, 2)
 }
 
 /// Whether no consistent assignment differs from `mode` at `ifaces` by
