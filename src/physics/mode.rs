@@ -660,20 +660,14 @@ fn cluster_law(
 /// it (inlined: the proofs take it at every stick).
 #[inline(always)]
 fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
-    stuck_force_after(sys, mode, load0, j, &mut (0, 0.0))
+    stuck_force_up(sys, mode, load0, j, &mut (0, 0.0))
 }
 
 /// [`stuck_force`] along a walk up the stack of one mode: `last`, the
 /// interface above the last cluster met and its acceleration, spares taking
 /// a cluster's acceleration again for each of its interfaces.
 #[inline(always)]
-fn stuck_force_after(
-    sys: &System,
-    mode: &Mode,
-    load0: f64,
-    j: usize,
-    last: &mut (usize, f64),
-) -> f64 {
+fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut (usize, f64)) -> f64 {
     if j >= last.0 {
         *last = body_accel(sys, mode, load0, j);
     }
@@ -780,7 +774,7 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
         let (mut j, mut x) = (0, 1.0f64);
         let mut last = (0, 0.0);
         for i in ifaces().filter(|&i| mode.is_stuck(i)) {
-            let f = stuck_force_after(sys, &mode, req.load0, i, &mut last);
+            let f = stuck_force_up(sys, &mode, req.load0, i, &mut last);
             let f = f / (sys.mus[i] * sys.normal[i]);
             (j, x) = if f.abs() > x.abs() { (i, f) } else { (j, x) };
         }
@@ -873,7 +867,9 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 /// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
 /// [`only_consistent`] covers every rival (one slip: all but `mode` with it stuck, checked;
 /// a free interface in `zero` fails it), else whether the walk without its bound finds a
-/// second consistent assignment (the best is known: the bounded walk is not needed).
+/// second consistent assignment (the best is known: the bounded walk is not needed). Out of
+/// line: inlined, the walk moved the sweep's code (the bare structure 7% slower).
+#[inline(never)]
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
     let (zero, slips) = (req.zero, req.zero & req.must_break);
     let proved = equal
@@ -891,15 +887,8 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
             _ => false,
         };
     (!proved)
-        .then(|| second_consistent(sys, req))
+        .then(|| Walk::new(sys, req).search(false, 2))
         .map_or((false, 0), |all| (all.count > 1, all.tries))
-}
-
-/// The walk without its bound, stopped at a second consistent assignment
-/// (out of line, as [`resolve_by_walk`]).
-#[inline(never)]
-fn second_consistent(sys: &System, req: &ResolveRequest) -> Search {
-    Walk::new(sys, req).search(false, 2)
 }
 
 /// Whether no consistent assignment differs from `mode` at `ifaces` by
@@ -918,7 +907,7 @@ fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking:
         let k = sys.muk[j] * sys.normal[j];
         bound += 4.0 * k * eps * sys.g;
         need = need.min(if mode.is_stuck(j) {
-            let margin = (k - stuck_force_after(sys, mode, load0, j, &mut last).abs()).max(0.0);
+            let margin = (k - stuck_force_up(sys, mode, load0, j, &mut last).abs()).max(0.0);
             margin * margin
         } else if sticking {
             // Its relative acceleration: only the two clusters it separates.
