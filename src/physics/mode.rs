@@ -266,8 +266,8 @@ impl Dynamics {
         d
     }
 
-    /// The clusters, masses and forces of `mode` only (what the contact law
-    /// needs), without its guards: for the candidate modes of a resolution.
+    /// The clusters, masses and forces of `mode` only, without its guards
+    /// (the part [`cluster_law`] follows operation for operation).
     pub fn clusters(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics {
             n_clusters: 0,
@@ -660,17 +660,37 @@ fn cluster_law(
 /// it (inlined: the proofs take it at every stick).
 #[inline(always)]
 fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
-    let bottom = (1..j).rev().find(|&i| !mode.is_stuck(i)).unwrap_or(0);
-    let end = (j + 1..sys.n + 1)
-        .find(|&i| !mode.is_stuck(i))
-        .unwrap_or(sys.n + 1);
-    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
+    stuck_force_up(sys, mode, load0, j, &mut (0, 0.0))
+}
+
+/// [`stuck_force`] along a walk up the stack of one mode: `last`, the
+/// interface above the last cluster met and its acceleration, spares taking
+/// a cluster's acceleration again for each of its interfaces.
+#[inline(always)]
+fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut (usize, f64)) -> f64 {
+    if j >= last.0 {
+        *last = body_accel(sys, mode, load0, j);
+    }
+    let (end, accel) = *last;
     let f_top = if end <= sys.n {
         -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
     } else {
         0.0
     };
     sys.mass_down[j][end] * accel + f_top
+}
+
+/// The absolute acceleration of the cluster of `mode` that holds body `i`,
+/// by [`cluster_law`] (as [`Dynamics::accel`] has it), after the interface
+/// above that cluster.
+#[inline(always)]
+fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize) -> (usize, f64) {
+    let bottom = (1..i + 1).rev().find(|&k| !mode.is_stuck(k)).unwrap_or(0);
+    let end = (i + 1..sys.n + 1)
+        .find(|&k| !mode.is_stuck(k))
+        .unwrap_or(sys.n + 1);
+    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
+    (end, accel)
 }
 
 /// What the resolution is asked to decide.
@@ -752,8 +772,10 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             return only_consistent(sys, &mode, zero, req.load0, true).then_some(res);
         }
         let (mut j, mut x) = (0, 1.0f64);
+        let mut last = (0, 0.0);
         for i in ifaces().filter(|&i| mode.is_stuck(i)) {
-            let f = stuck_force(sys, &mode, req.load0, i) / (sys.mus[i] * sys.normal[i]);
+            let f = stuck_force_up(sys, &mode, req.load0, i, &mut last);
+            let f = f / (sys.mus[i] * sys.normal[i]);
             (j, x) = if f.abs() > x.abs() { (i, f) } else { (j, x) };
         }
         (j > 0).then_some(())?;
@@ -844,7 +866,10 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 
 /// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
 /// [`only_consistent`] covers every rival (one slip: all but `mode` with it stuck, checked;
-/// a free interface in `zero` fails it), else the walk's.
+/// a free interface in `zero` fails it), else whether the walk without its bound finds a
+/// second consistent assignment (the best is known: the bounded walk is not needed). Out of
+/// line: inlined, the walk moved the sweep's code (the bare structure 7% slower).
+#[inline(never)]
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
     let (zero, slips) = (req.zero, req.zero & req.must_break);
     let proved = equal
@@ -862,8 +887,8 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
             _ => false,
         };
     (!proved)
-        .then(|| resolve_by_walk(sys, req))
-        .map_or((false, 0), |r| (r.ambiguous, r.tries))
+        .then(|| Walk::new(sys, req).search(false, 2))
+        .map_or((false, 0), |all| (all.count > 1, all.tries))
 }
 
 /// Whether no consistent assignment differs from `mode` at `ifaces` by
@@ -875,17 +900,19 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
 /// least `(muk N - |F|)²` (a stick slipping), `(2 muk N)²` (a slip reversing)
 /// or `M r² min(m_i, m_(i-1)) / 2` (a slip sticking): each twice the bound.
 fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking: bool) -> bool {
-    let d = sticking.then(|| Dynamics::clusters(sys, mode));
     let (eps, mass) = (CONSISTENCY_TOL, sys.mass_up[1][sys.n + 1]);
     let (mut bound, mut need) = (0.0, f64::INFINITY);
+    let mut last = (0, 0.0);
     (1..sys.n + 1).filter(|&j| ifaces & (1 << j) != 0).all(|j| {
         let k = sys.muk[j] * sys.normal[j];
         bound += 4.0 * k * eps * sys.g;
         need = need.min(if mode.is_stuck(j) {
-            let margin = (k - stuck_force(sys, mode, load0, j).abs()).max(0.0);
+            let margin = (k - stuck_force_up(sys, mode, load0, j, &mut last).abs()).max(0.0);
             margin * margin
-        } else if let Some(d) = &d {
-            let r = (mode.contact[j].slip_sign() * d.rel_accel(j, load0)).max(0.0);
+        } else if sticking {
+            // Its relative acceleration: only the two clusters it separates.
+            let rel = body_accel(sys, mode, load0, j).1 - body_accel(sys, mode, load0, j - 1).1;
+            let r = (mode.contact[j].slip_sign() * rel).max(0.0);
             bound += (sys.mus[j] * sys.normal[j] * (1.0 + eps) - k) * r;
             (4.0 * k * k).min(0.5 * sys.mass[j].min(sys.mass[j - 1]) * mass * r * r)
         } else {

@@ -160,8 +160,8 @@ impl Flow {
     /// its spread.
     fn accel(&mut self) -> (&Poly, f64) {
         if !self.accel_built {
+            // (Coefficients past the degree are never read: not zeroed.)
             let c = &mut self.accel_poly.c;
-            *c = [0.0; N_COEF];
             let (u, v) = (self.u.coefs(), self.v.coefs());
             for ((a, uk), vk) in c.iter_mut().zip(u).zip(v) {
                 *a = -self.w2 * uk - self.cm * vk;
@@ -238,7 +238,7 @@ impl Flow {
                 let vh = upper(hi);
                 let (p, spread) = &mut out[0];
                 if lo == 0 {
-                    for (ck, vk) in p.c.iter_mut().zip(&self.v.c) {
+                    for (ck, vk) in p.c.iter_mut().zip(self.v.coefs()) {
                         *ck = sign * (0.0 - vk);
                     }
                     for (k, vhk) in vh.iter().enumerate() {
@@ -267,11 +267,13 @@ impl Flow {
                 // A side's spread is the acceleration's (`±1` times its
                 // coefficients past the first).
                 if a0 - spread <= lo {
-                    out[n] = (accel.affine(1.0, -lo), spread);
+                    out[n].0.set_affine(accel, 1.0, -lo);
+                    out[n].1 = spread;
                     n += 1;
                 }
                 if a0 + spread >= hi {
-                    out[n] = (accel.affine(-1.0, hi), spread);
+                    out[n].0.set_affine(accel, -1.0, hi);
+                    out[n].1 = spread;
                     n += 1;
                 }
                 n
@@ -448,20 +450,14 @@ impl Simulator {
                 continue;
             }
             let n_polys = flow.guard_polys(self, g, polys);
-            for (poly, scale) in &polys[..n_polys] {
+            for (poly, scale) in &mut polys[..n_polys] {
                 // A guard at zero (a contact that has just switched) must
                 // grow from it, or it fires at once.
-                let scale = *scale;
-                let grown;
-                let poly = if poly.c[0] > 1e-12 * scale {
-                    poly
-                } else if let Some(p) = poly.past_zero_start() {
-                    grown = p;
-                    &grown
-                } else {
+                if !(poly.c[0] > 1e-12 * *scale || poly.divide_zero_start()) {
                     at_once |= 1 << j;
                     continue;
-                };
+                }
+                let poly = &*poly;
                 let (g0, d0) = poly.start();
                 // Only zeros before the earliest one found so far matter.
                 let end = earliest.map_or(1.0, |(s, _)| s);

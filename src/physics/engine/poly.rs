@@ -76,12 +76,15 @@ impl Poly {
         }
     }
 
-    /// `sign p + offset`.
+    /// Sets `self` to `sign p + offset` (its coefficients past the degree
+    /// are never read: left as they are).
     #[inline]
-    pub(super) fn affine(&self, sign: f64, offset: f64) -> Poly {
-        let mut c = self.c.map(|x| sign * x);
-        c[0] += offset;
-        Poly::new(c, self.deg)
+    pub(super) fn set_affine(&mut self, p: &Poly, sign: f64, offset: f64) {
+        for (c, pk) in self.c[..=p.deg].iter_mut().zip(&p.c) {
+            *c = sign * pk;
+        }
+        self.c[0] += offset;
+        self.deg = p.deg;
     }
 
     /// For a guard that is zero at `s = 0` up to rounding: `p / s^m`, `m`
@@ -89,14 +92,21 @@ impl Poly {
     /// the zeros of `p` in (0, 1]. `None` when the first coefficient left is
     /// negative: the guard does not grow from its zero.
     pub(super) fn past_zero_start(&self) -> Option<Poly> {
+        let mut p = *self;
+        p.divide_zero_start().then_some(p)
+    }
+
+    /// [`Poly::past_zero_start`] in place: false (`self` unchanged) where it
+    /// is `None`.
+    pub(super) fn divide_zero_start(&mut self) -> bool {
         let scale: f64 = self.c[1..self.deg + 1].iter().map(|c| c.abs()).sum();
-        let m = (0..self.deg.min(3) + 1).find(|&k| self.c[k].abs() > 1e-12 * scale)?;
-        if self.c[m] < 0.0 {
-            return None;
-        }
-        let mut c = [0.0; N_COEF];
-        c[..=self.deg - m].copy_from_slice(&self.c[m..=self.deg]);
-        Some(Poly::new(c, self.deg - m))
+        let m = (0..self.deg.min(3) + 1).find(|&k| self.c[k].abs() > 1e-12 * scale);
+        let Some(m) = m.filter(|&m| self.c[m] >= 0.0) else {
+            return false;
+        };
+        self.c.copy_within(m..=self.deg, 0);
+        self.deg -= m;
+        true
     }
 
     pub(super) fn coefs(&self) -> &[f64] {
