@@ -72,14 +72,15 @@ impl StructureRk4 {
         (self.slip_load0 + fext - self.k * u0 - self.c * v0) * self.inv_mass0 + ag * self.ag_gain
     }
 
-    /// Absolute acceleration of the structure and its time derivative at `t`.
+    /// Absolute acceleration of the structure and its time derivative at `t`
+    /// (the rate by [`Dynamics::accel0_rate`]).
     #[inline]
-    fn accel_and_jerk(&self, t: f64, u0: f64, v0: f64) -> (f64, f64) {
+    fn accel_and_jerk(&self, sim: &Simulator, t: f64) -> (f64, f64) {
+        let (u0, v0) = (sim.u[0], sim.v[0]);
         let (ag, fext) = self.inputs(t);
         let a = self.accel(ag, fext, u0, v0);
-        let jerk = (self.exc.fext_rate - self.k * v0 - self.c * (a - ag)) * self.inv_mass0
-            + self.exc.ag_rate * self.ag_gain;
-        (a, jerk)
+        let rates = [self.exc.ag_rate, self.exc.fext_rate];
+        (a, sim.dynamics.accel0_rate(&sim.sys, [v0, a, ag], rates))
     }
 
     /// Rates of (u0, v0, input work, viscous work).
@@ -143,7 +144,7 @@ impl Simulator {
             upper_work += work;
         }
         let rk = StructureRk4::new(&self.sys, d, exc, t_ref);
-        let (a0_start, jerk_start) = rk.accel_and_jerk(self.t, self.u[0], self.v[0]);
+        let (a0_start, jerk_start) = rk.accel_and_jerk(self, self.t);
         let (u0_start, v0_start) = (self.u[0], self.v[0]);
         let d = &self.dynamics;
         for j in 1..=n {
@@ -163,7 +164,7 @@ impl Simulator {
         self.t += h;
         self.stats.steps += 1;
 
-        let (a0_end, jerk_end) = rk.accel_and_jerk(self.t, self.u[0], self.v[0]);
+        let (a0_end, jerk_end) = rk.accel_and_jerk(self, self.t);
         hermite::raise_peak(&mut self.peak_u0, u0_start, v0_start, x1[0], x1[1], h);
         hermite::raise_peak(&mut self.peak_a0, a0_start, jerk_start, a0_end, jerk_end, h);
     }

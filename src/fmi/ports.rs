@@ -93,15 +93,15 @@ pub fn exact_at_step_start(
 /// the instant, with their slopes; linear over a step). The engine's rules:
 /// the acceleration is [`Dynamics::accel0`] of [`Dynamics::load0`]; forces
 /// move it by their rate over `M0` (`inv_mass0`: `Fext`, the spring and the
-/// damper of a structure) and `ag` by its share `ag_gain` (as the engine's
-/// `accel_and_jerk`). On a structure `ag_gain = 0`; on a prescribed support
-/// `k = c = inv_mass0 = 0`, so the acceleration follows `ag`: `ag`,
-/// `der(ag)`, 0.
+/// damper of a structure) and `ag` by its share `ag_gain`
+/// ([`Dynamics::accel0_rate`]). On a structure `ag_gain = 0`; on a
+/// prescribed support `k = c = inv_mass0 = 0`, so the acceleration follows
+/// `ag`: `ag`, `der(ag)`, 0.
 fn structure_accel(s: &System, d: &Dynamics, o: &Outputs, exc: &Excitation) -> [f64; 3] {
     let (k, c) = (s.k, s.c);
     let acc0 = d.accel0(Dynamics::load0(s, o.up, o.vp, exc.ag, exc.fext));
     let rel0 = acc0 - exc.ag;
-    let acc0_1 = (exc.fext_rate - k * o.vp - c * rel0) * d.inv_mass0 + exc.ag_rate * d.ag_gain;
+    let acc0_1 = d.accel0_rate(s, [o.vp, acc0, exc.ag], [exc.ag_rate, exc.fext_rate]);
     let rel0_1 = acc0_1 - exc.ag_rate;
     let acc0_2 = (-k * rel0 - c * rel0_1) * d.inv_mass0;
     [acc0, acc0_1, acc0_2]

@@ -412,6 +412,20 @@ impl Dynamics {
         }
     }
 
+    /// Rate of the structure cluster's absolute acceleration `A0` at
+    /// velocity `v0` and acceleration `accel0`: the inputs' rates through
+    /// the input rule, less the spring's and the damper's, `(k v0 + c (A0 -
+    /// ag)) / M0` (`k = c = 0` on a prescribed support).
+    #[inline]
+    pub fn accel0_rate(
+        &self,
+        sys: &System,
+        [v0, accel0, ag]: [f64; 3],
+        [ag_rate, fext_rate]: [f64; 2],
+    ) -> f64 {
+        (fext_rate - sys.k * v0 - sys.c * (accel0 - ag)) * self.inv_mass0 + ag_rate * self.ag_gain
+    }
+
     /// The force the stack puts on body 0 (the structure or the support)
     /// along +x: `-F_1` (0 without blocks).
     pub fn floor_force(&self, mode: &Mode, load0: f64) -> f64 {
