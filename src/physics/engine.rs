@@ -323,7 +323,8 @@ impl Simulator {
     /// Advances to `t_end` under an excitation that is linear over
     /// `[now, t_end]` (values given at the current time).
     pub fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
-        self.advance_source(Plain(std::iter::once((t_end, *exc))))
+        let law_changed = self.take_reference();
+        self.advance_source_from((t_end, *exc), no_more_pieces(), law_changed)
     }
 
     /// Advances through consecutive linear pieces, each given by its end
@@ -343,9 +344,12 @@ impl Simulator {
     /// On a prescribed support the mode at the call's start becomes the
     /// reference of the support's law (the master computed the inputs with
     /// it), after the support's drift is taken out ([`mode::support_law`]).
-    pub fn advance_source(&mut self, pieces: impl PieceSource) -> Result<(), SimError> {
+    pub fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
         let law_changed = self.take_reference();
-        self.advance_source_from(pieces, law_changed)
+        match pieces.next_piece() {
+            Some(first) => self.advance_source_from(first, pieces, law_changed),
+            None => self.check_finite(),
+        }
     }
 
     /// As [`Simulator::advance`], but the support's law keeps its reference
@@ -359,15 +363,17 @@ impl Simulator {
         t_end: f64,
         exc: &Excitation,
     ) -> Result<(), SimError> {
-        self.advance_source_from(Plain(std::iter::once((t_end, *exc))), false)
+        self.advance_source_from((t_end, *exc), no_more_pieces(), false)
     }
 
+    /// From the `first` piece on, then `pieces`.
     fn advance_source_from(
         &mut self,
+        first: (f64, Excitation),
         mut pieces: impl PieceSource,
         mut law_changed: bool,
     ) -> Result<(), SimError> {
-        let mut pending = pieces.next_piece();
+        let mut pending = Some(first);
         while let Some((t_end, exc)) = pending.take() {
             let mut piece = self.begin_piece(t_end, &exc, law_changed)?;
             law_changed = false;
@@ -533,4 +539,10 @@ impl Simulator {
         self.dyn_cache.clear();
         self.dynamics = Dynamics::new(&self.sys, &self.mode);
     }
+}
+
+/// The source after a single piece: none that the driver must be ready to
+/// begin (an empty source compiles the sweep without the code to move on).
+fn no_more_pieces() -> Plain<std::iter::Empty<(f64, Excitation)>> {
+    Plain(std::iter::empty())
 }

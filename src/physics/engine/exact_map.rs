@@ -283,6 +283,10 @@ pub(super) struct MapCache {
     /// The last stretch length asked of [`MapCache::stretch_degree`] (its
     /// bits) and its degree: most substeps have the same length.
     last_degree: Option<(u64, usize)>,
+    /// The last substep asked of [`MapCache::rows`] (its mass and length,
+    /// bit for bit), its map's index and its rows: a master with a fixed
+    /// step asks for them again at every call.
+    last_rows: Option<([u64; 2], usize, Rows)>,
 }
 
 /// How many maps are kept (then the oldest is replaced).
@@ -304,6 +308,7 @@ impl MapCache {
             return i;
         }
         let map = ExactMap::new(sys, mass, h);
+        self.last_rows = None; // its index may be replaced
         self.last = if self.maps.len() < CACHE_SIZE {
             if self.maps.is_empty() {
                 // Room for every map at once (no copies as the vector grows).
@@ -323,8 +328,16 @@ impl MapCache {
         self.last
     }
 
-    pub(super) fn get(&self, i: usize) -> &ExactMap {
-        &self.maps[i]
+    /// The map of a substep of `mass` and any length `h` (the map of its
+    /// canonical length), and the substep's rows ([`Rows::new`]).
+    pub(super) fn rows(&mut self, sys: &System, mass: f64, h: f64) -> (&ExactMap, &Rows) {
+        let key = [mass.to_bits(), h.to_bits()];
+        if self.last_rows.as_ref().is_none_or(|(k, ..)| *k != key) {
+            let i = self.index(sys, mass, canonical_length(h));
+            self.last_rows = Some((key, i, Rows::new(&self.maps[i], h)));
+        }
+        let (_, i, rows) = self.last_rows.as_ref().expect("set above");
+        (&self.maps[*i], rows)
     }
 
     /// The degree of the event path's Taylor polynomials over a stretch of

@@ -23,7 +23,7 @@
 //! order in the difference, which leaves an error of its square.
 
 use super::exact_events::raise_substep_peaks;
-use super::exact_map::{canonical_length, dot, ExactMap};
+use super::exact_map::{dot, ExactMap};
 use super::pieces::is_jump;
 use super::proofs::{
     energy_run, in_band_proved, linear_guard_lasts, raise_peak_proved, slip_guard_proved,
@@ -205,9 +205,7 @@ impl Simulator {
         // The piece in locals (written back at the end): the loop reads
         // them every substep.
         let mut cur = *piece;
-        let first = maps.index(sys, mass, canonical_length(cur.h));
-        let mut map = maps.get(first);
-        let mut rows = Rows::new(map, cur.h);
+        let (mut map, mut rows) = maps.rows(sys, mass, cur.h);
         let (mut row_u, mut row_v) = (rows.u, rows.v);
         // The upper clusters' terms in `A_c` over a substep of `h`.
         let terms = |h: f64| [0.5 * h * h, h].map(|k| accel_c.map(|a| k * a));
@@ -281,15 +279,10 @@ impl Simulator {
                         // A record's next sample: the same substeps, map and rows.
                         (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
                     } else {
-                        sums.flush(&rows, mass, load_accel, &mut work);
+                        sums.flush(rows, mass, load_accel, &mut work);
                         cur = Piece::new(t0, t_end, &exc, h_max);
-                        let hc = canonical_length(cur.h);
-                        if hc != map.h {
-                            let i = maps.index(sys, mass, hc);
-                            map = maps.get(i);
-                            (w2, cm) = (map.w2, map.cm);
-                        }
-                        rows = Rows::new(map, cur.h);
+                        (map, rows) = maps.rows(sys, mass, cur.h);
+                        (w2, cm) = (map.w2, map.cm);
                         (row_u, row_v) = (rows.u, rows.v);
                         [half_h2a, ha] = terms(cur.h);
                     }
@@ -445,7 +438,7 @@ impl Simulator {
         pieces.skip(lean[0]);
         *piece = cur;
         if taken > 0 {
-            sums.add_work(&rows, mass, load_accel, &mut work);
+            sums.add_work(rows, mass, load_accel, &mut work);
             // Input work on the upper clusters over the run, exact: with
             // v_c' = A_c - ag, -m ag v_c = d(m v_c²/2)/dt - m A_c v_c.
             let mut upper = 0.0;
