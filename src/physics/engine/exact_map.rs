@@ -283,11 +283,18 @@ pub(super) struct MapCache {
     /// The last stretch length asked of [`MapCache::stretch_degree`] (its
     /// bits) and its degree: most substeps have the same length.
     last_degree: Option<(u64, usize)>,
-    /// The last substep asked of [`MapCache::rows`] (its mass and length,
-    /// bit for bit), its map's index and its rows: a master with a fixed
-    /// step asks for them again at every call.
-    last_rows: Option<([u64; 2], usize, Rows)>,
+    /// The last substeps asked of [`MapCache::rows`] (their mass and
+    /// length, bit for bit), their maps' indices and their rows: a master
+    /// with a fixed step asks for them again at every call (its steps'
+    /// lengths differ by the rounding of the times: a few values); the
+    /// first `rows_kept` in use, `rows_next` replaced next.
+    rows: [([u64; 2], usize, Rows); ROWS_KEPT],
+    rows_kept: usize,
+    rows_next: usize,
 }
+
+/// How many substeps' rows are kept.
+const ROWS_KEPT: usize = 4;
 
 /// How many maps are kept (then the oldest is replaced).
 const CACHE_SIZE: usize = 16;
@@ -308,7 +315,8 @@ impl MapCache {
             return i;
         }
         let map = ExactMap::new(sys, mass, h);
-        self.last_rows = None; // its index may be replaced
+        // Its index may be one of the rows' maps.
+        (self.rows_kept, self.rows_next) = (0, 0);
         self.last = if self.maps.len() < CACHE_SIZE {
             if self.maps.is_empty() {
                 // Room for every map at once (no copies as the vector grows).
@@ -332,11 +340,24 @@ impl MapCache {
     /// canonical length), and the substep's rows ([`Rows::new`]).
     pub(super) fn rows(&mut self, sys: &System, mass: f64, h: f64) -> (&ExactMap, &Rows) {
         let key = [mass.to_bits(), h.to_bits()];
-        if self.last_rows.as_ref().is_none_or(|(k, ..)| *k != key) {
-            let i = self.index(sys, mass, canonical_length(h));
-            self.last_rows = Some((key, i, Rows::new(&self.maps[i], h)));
-        }
-        let (_, i, rows) = self.last_rows.as_ref().expect("set above");
+        let kept = &self.rows[..self.rows_kept];
+        let k = match kept.iter().position(|(k, ..)| *k == key) {
+            Some(k) => k,
+            None => {
+                let i = self.index(sys, mass, canonical_length(h));
+                let k = if self.rows_kept < ROWS_KEPT {
+                    self.rows_kept += 1;
+                    self.rows_kept - 1
+                } else {
+                    let k = self.rows_next;
+                    self.rows_next = (k + 1) % ROWS_KEPT;
+                    k
+                };
+                self.rows[k] = (key, i, Rows::new(&self.maps[i], h));
+                k
+            }
+        };
+        let (_, i, rows) = &self.rows[k];
         (&self.maps[*i], rows)
     }
 

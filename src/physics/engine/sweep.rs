@@ -80,16 +80,16 @@ impl WorkSums {
     #[inline(never)]
     fn add_work(&self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
         let (s, l) = (&self.products, &self.linear);
-        let dot10 = |a: &[f64; 10]| -> f64 {
-            let mut x = 0.0;
-            for k in 0..10 {
-                x += a[k] * s[QUAD_ORDER[k]];
-            }
-            x
-        };
+        // Both forms at once, in two lanes (each summed in its own order).
+        let mut pv = [0.0; 2];
+        for k in 0..10 {
+            let x = s[QUAD_ORDER[k]];
+            pv[0] += rows.work_pv[k][0] * x;
+            pv[1] += rows.work_pv[k][1] * x;
+        }
         let with_load = dot(&rows.work_l, l);
-        work[0] += mass * (dot10(&rows.work_p) - load_accel * with_load);
-        work[1] += rows.c * dot10(&rows.work_v);
+        work[0] += mass * (pv[0] - load_accel * with_load);
+        work[1] += rows.c * pv[1];
     }
 }
 
@@ -523,15 +523,15 @@ fn continue_piece(
 pub(super) struct Rows {
     u: [f64; 4],
     v: [f64; 4],
-    /// Input work per unit mass over a substep, without the mode's load:
-    /// `(p - L)(u1 - u) + p' (h u1 - ∫u)` on the map, plus `delta` times
-    /// the integrand at its end, `(p - L) v`, with `v = V z` and `p = z_2 +
-    /// h z_3` there: its terms in `p` on the products, and `work_l` the row
-    /// that multiplies `-L` (on the sums of `z`).
-    work_p: [f64; 10],
+    /// In pairs `[work_p, work_v]` (one product, two lanes): the input
+    /// work per unit mass over a substep, without the mode's load: `(p -
+    /// L)(u1 - u) + p' (h u1 - ∫u)` on the map, plus `delta` times the
+    /// integrand at its end, `(p - L) v`, with `v = V z` and `p = z_2 + h
+    /// z_3` there: its terms in `p` on the products, and `work_l` the row
+    /// that multiplies `-L` (on the sums of `z`); `∫ v²` on the map (its
+    /// quadratic form) plus `delta v²` at its end.
+    work_pv: [[f64; 2]; 10],
     work_l: [f64; 4],
-    /// `∫ v²` on the map (its quadratic form) plus `delta v²` at its end.
-    work_v: [f64; 10],
     c: f64,
 }
 
@@ -545,9 +545,11 @@ impl Rows {
         Rows {
             u: std::array::from_fn(|k| r.u[k] + delta * d.u[k]),
             v: std::array::from_fn(|k| r.v[k] + delta * d.v[k]),
-            work_p: std::array::from_fn(|k| r.work_p[k] + delta * d.work_p[k]),
+            work_pv: std::array::from_fn(|k| {
+                let (r, d) = (r.work_pv[k], d.work_pv[k]);
+                [r[0] + delta * d[0], r[1] + delta * d[1]]
+            }),
             work_l: std::array::from_fn(|k| r.work_l[k] + delta * d.work_l[k]),
-            work_v: std::array::from_fn(|k| r.work_v[k] + delta * d.work_v[k]),
             c: r.c,
         }
     }
@@ -562,23 +564,26 @@ impl Rows {
         let u0m1 = u[0] - 1.0;
         let w: [f64; 4] = std::array::from_fn(|j| hm * u[j] - map.int_u[j]);
         // Packed: 00, 11, 22, 33, 01, 02, 03, 12, 13, 23.
+        let pair = |p: [f64; 10], v: [f64; 10]| std::array::from_fn(|k| [p[k], v[k]]);
         let rows = Rows {
             u: *u,
             v: *v,
-            work_p: [
-                0.0,
-                0.0,
-                u[2],
-                w[3],
-                0.0,
-                u0m1,
-                w[0],
-                u[1],
-                w[1],
-                u[3] + w[2],
-            ],
+            work_pv: pair(
+                [
+                    0.0,
+                    0.0,
+                    u[2],
+                    w[3],
+                    0.0,
+                    u0m1,
+                    w[0],
+                    u[1],
+                    w[1],
+                    u[3] + w[2],
+                ],
+                map.quad,
+            ),
             work_l: [u0m1, u[1], u[2], u[3]],
-            work_v: map.quad,
             c: map.c,
         };
         // The rest `delta`, to first order: u' = v, v' the acceleration;
@@ -588,31 +593,33 @@ impl Rows {
         let rate = Rows {
             u: *v,
             v: accel,
-            work_p: [
-                0.0,
-                0.0,
-                v[2],
-                hv[3],
-                0.0,
-                v[0],
-                hv[0],
-                v[1],
-                hv[1],
-                v[3] + hv[2],
-            ],
+            work_pv: pair(
+                [
+                    0.0,
+                    0.0,
+                    v[2],
+                    hv[3],
+                    0.0,
+                    v[0],
+                    hv[0],
+                    v[1],
+                    hv[1],
+                    v[3] + hv[2],
+                ],
+                [
+                    v[0] * v[0],
+                    v[1] * v[1],
+                    v[2] * v[2],
+                    v[3] * v[3],
+                    2.0 * v[0] * v[1],
+                    2.0 * v[0] * v[2],
+                    2.0 * v[0] * v[3],
+                    2.0 * v[1] * v[2],
+                    2.0 * v[1] * v[3],
+                    2.0 * v[2] * v[3],
+                ],
+            ),
             work_l: *v,
-            work_v: [
-                v[0] * v[0],
-                v[1] * v[1],
-                v[2] * v[2],
-                v[3] * v[3],
-                2.0 * v[0] * v[1],
-                2.0 * v[0] * v[2],
-                2.0 * v[0] * v[3],
-                2.0 * v[1] * v[2],
-                2.0 * v[1] * v[3],
-                2.0 * v[2] * v[3],
-            ],
             c: 0.0,
         };
         [rows, rate]
