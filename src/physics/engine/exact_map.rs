@@ -337,28 +337,37 @@ impl MapCache {
     }
 
     /// The map of a substep of `mass` and any length `h` (the map of its
-    /// canonical length), and the substep's rows ([`Rows::new`]).
+    /// canonical length) and the substep's rows ([`Rows::new`]), kept.
+    #[inline(always)]
     pub(super) fn rows(&mut self, sys: &System, mass: f64, h: f64) -> (&ExactMap, &Rows) {
+        let (_, i, rows) = &self.rows[self.rows_slot(sys, mass, h)];
+        (&self.maps[*i], rows)
+    }
+
+    /// Where [`MapCache::rows`] keeps them.
+    #[inline(never)]
+    fn rows_slot(&mut self, sys: &System, mass: f64, h: f64) -> usize {
         let key = [mass.to_bits(), h.to_bits()];
         let kept = &self.rows[..self.rows_kept];
-        let k = match kept.iter().position(|(k, ..)| *k == key) {
-            Some(k) => k,
-            None => {
-                let i = self.index(sys, mass, canonical_length(h));
-                let k = if self.rows_kept < ROWS_KEPT {
-                    self.rows_kept += 1;
-                    self.rows_kept - 1
-                } else {
-                    let k = self.rows_next;
-                    self.rows_next = (k + 1) % ROWS_KEPT;
-                    k
-                };
-                self.rows[k] = (key, i, Rows::new(&self.maps[i], h));
-                k
-            }
+        if let Some(k) = kept.iter().position(|(k, ..)| *k == key) {
+            return k;
+        }
+        let i = self.index(sys, mass, canonical_length(h));
+        let k = if self.rows_kept < ROWS_KEPT {
+            self.rows_kept += 1;
+            self.rows_kept - 1
+        } else {
+            let k = self.rows_next;
+            self.rows_next = (k + 1) % ROWS_KEPT;
+            k
         };
-        let (_, i, rows) = &self.rows[k];
-        (&self.maps[*i], rows)
+        self.rows[k] = (key, i, Rows::new(&self.maps[i], h));
+        k
+    }
+
+    /// Map `i` ([`MapCache::index`]).
+    pub(super) fn get(&self, i: usize) -> &ExactMap {
+        &self.maps[i]
     }
 
     /// The degree of the event path's Taylor polynomials over a stretch of

@@ -23,7 +23,7 @@
 //! order in the difference, which leaves an error of its square.
 
 use super::exact_events::raise_substep_peaks;
-use super::exact_map::{dot, ExactMap};
+use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
 use super::proofs::{
     energy_run, in_band_proved, linear_guard_lasts, raise_peak_proved, slip_guard_proved,
@@ -205,7 +205,11 @@ impl Simulator {
         // The piece in locals (written back at the end): the loop reads
         // them every substep.
         let mut cur = *piece;
+        // The map and rows kept for the piece's substeps (a master calling
+        // once per step asks for the same few lengths again and again); a
+        // piece of another length met on the way has its own rows.
         let (mut map, mut rows) = maps.rows(sys, mass, cur.h);
+        let mut own_rows: Rows;
         let (mut row_u, mut row_v) = (rows.u, rows.v);
         // The upper clusters' terms in `A_c` over a substep of `h`.
         let terms = |h: f64| [0.5 * h * h, h].map(|k| accel_c.map(|a| k * a));
@@ -281,8 +285,14 @@ impl Simulator {
                     } else {
                         sums.flush(rows, mass, load_accel, &mut work);
                         cur = Piece::new(t0, t_end, &exc, h_max);
-                        (map, rows) = maps.rows(sys, mass, cur.h);
-                        (w2, cm) = (map.w2, map.cm);
+                        let hc = canonical_length(cur.h);
+                        if hc != map.h {
+                            let i = maps.index(sys, mass, hc);
+                            map = maps.get(i);
+                            (w2, cm) = (map.w2, map.cm);
+                        }
+                        own_rows = Rows::new(map, cur.h);
+                        rows = &own_rows;
                         (row_u, row_v) = (rows.u, rows.v);
                         [half_h2a, ha] = terms(cur.h);
                     }
