@@ -323,8 +323,9 @@ impl Simulator {
     /// Advances to `t_end` under an excitation that is linear over
     /// `[now, t_end]` (values given at the current time).
     pub fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
+        // No source after it: the sweep then has no code to move on.
         let law_changed = self.take_reference();
-        self.advance_source_from((t_end, *exc), no_more_pieces(), law_changed)
+        self.advance_source_from(Some((t_end, *exc)), Plain(std::iter::empty()), law_changed)
     }
 
     /// Advances through consecutive linear pieces, each given by its end
@@ -346,10 +347,7 @@ impl Simulator {
     /// it), after the support's drift is taken out ([`mode::support_law`]).
     pub fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
         let law_changed = self.take_reference();
-        match pieces.next_piece() {
-            Some(first) => self.advance_source_from(first, pieces, law_changed),
-            None => self.check_finite(),
-        }
+        self.advance_source_from(pieces.next_piece(), pieces, law_changed)
     }
 
     /// As [`Simulator::advance`], but the support's law keeps its reference
@@ -363,18 +361,18 @@ impl Simulator {
         t_end: f64,
         exc: &Excitation,
     ) -> Result<(), SimError> {
-        self.advance_source_from((t_end, *exc), no_more_pieces(), false)
+        self.advance_source_from(Some((t_end, *exc)), Plain(std::iter::empty()), false)
     }
 
     /// From the `first` piece on, then `pieces`.
     #[inline(always)]
     fn advance_source_from(
         &mut self,
-        first: (f64, Excitation),
+        first: Option<(f64, Excitation)>,
         mut pieces: impl PieceSource,
         mut law_changed: bool,
     ) -> Result<(), SimError> {
-        let mut pending = Some(first);
+        let mut pending = first;
         while let Some((t_end, exc)) = pending.take() {
             let mut piece = self.begin_piece(t_end, &exc, law_changed)?;
             law_changed = false;
@@ -539,10 +537,4 @@ impl Simulator {
         self.dyn_cache.clear();
         self.dynamics = Dynamics::new(&self.sys, &self.mode);
     }
-}
-
-/// The source after a single piece: none that the driver must be ready to
-/// begin (an empty source compiles the sweep without the code to move on).
-fn no_more_pieces() -> Plain<std::iter::Empty<(f64, Excitation)>> {
-    Plain(std::iter::empty())
 }

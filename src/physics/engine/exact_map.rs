@@ -283,18 +283,12 @@ pub(super) struct MapCache {
     /// The last stretch length asked of [`MapCache::stretch_degree`] (its
     /// bits) and its degree: most substeps have the same length.
     last_degree: Option<(u64, usize)>,
-    /// The last substeps asked of [`MapCache::rows`] (their mass and
-    /// length, bit for bit), their maps' indices and their rows: a master
-    /// with a fixed step asks for them again at every call (its steps'
-    /// lengths differ by the rounding of the times: a few values); the
-    /// first `rows_kept` in use, `rows_next` replaced next.
-    rows: [([u64; 2], usize, Rows); ROWS_KEPT],
+    /// The last substeps' rows (mass and length bit for bit: a master's calls
+    /// ask for a few lengths), with their maps; `rows_kept` in use.
+    rows: [([u64; 2], usize, Rows); 4],
     rows_kept: usize,
     rows_next: usize,
 }
-
-/// How many substeps' rows are kept.
-const ROWS_KEPT: usize = 4;
 
 /// How many maps are kept (then the oldest is replaced).
 const CACHE_SIZE: usize = 16;
@@ -315,8 +309,7 @@ impl MapCache {
             return i;
         }
         let map = ExactMap::new(sys, mass, h);
-        // Its index may be one of the rows' maps.
-        (self.rows_kept, self.rows_next) = (0, 0);
+        (self.rows_kept, self.rows_next) = (0, 0); // (rows of a replaced map)
         self.last = if self.maps.len() < CACHE_SIZE {
             if self.maps.is_empty() {
                 // Room for every map at once (no copies as the vector grows).
@@ -336,8 +329,7 @@ impl MapCache {
         self.last
     }
 
-    /// The map of a substep of `mass` and any length `h` (the map of its
-    /// canonical length) and the substep's rows ([`Rows::new`]), kept.
+    /// The map and rows ([`Rows::new`]) of a substep of `mass` and length `h`.
     #[inline(always)]
     pub(super) fn rows(&mut self, sys: &System, mass: f64, h: f64) -> (&ExactMap, &Rows) {
         let (_, i, rows) = &self.rows[self.rows_slot(sys, mass, h)];
@@ -348,24 +340,17 @@ impl MapCache {
     #[inline(never)]
     fn rows_slot(&mut self, sys: &System, mass: f64, h: f64) -> usize {
         let key = [mass.to_bits(), h.to_bits()];
-        let kept = &self.rows[..self.rows_kept];
-        if let Some(k) = kept.iter().position(|(k, ..)| *k == key) {
+        if let Some(k) = self.rows[..self.rows_kept].iter().position(|r| r.0 == key) {
             return k;
         }
         let i = self.index(sys, mass, canonical_length(h));
-        let k = if self.rows_kept < ROWS_KEPT {
-            self.rows_kept += 1;
-            self.rows_kept - 1
-        } else {
-            let k = self.rows_next;
-            self.rows_next = (k + 1) % ROWS_KEPT;
-            k
-        };
+        let k = self.rows_next;
+        self.rows_next = (k + 1) % self.rows.len();
+        self.rows_kept = self.rows_kept.max(k + 1);
         self.rows[k] = (key, i, Rows::new(&self.maps[i], h));
         k
     }
 
-    /// Map `i` ([`MapCache::index`]).
     pub(super) fn get(&self, i: usize) -> &ExactMap {
         &self.maps[i]
     }

@@ -205,9 +205,8 @@ impl Simulator {
         // The piece in locals (written back at the end): the loop reads
         // them every substep.
         let mut cur = *piece;
-        // The map and rows kept for the piece's substeps (a master calling
-        // once per step asks for the same few lengths again and again); a
-        // piece of another length met on the way has its own rows.
+        // Kept rows (a master's calls: a few lengths); a piece of another
+        // length met on the way has its own.
         let (mut map, mut rows) = maps.rows(sys, mass, cur.h);
         let mut own_rows: Rows;
         let (mut row_u, mut row_v) = (rows.u, rows.v);
@@ -533,13 +532,11 @@ fn continue_piece(
 pub(super) struct Rows {
     u: [f64; 4],
     v: [f64; 4],
-    /// In pairs `[work_p, work_v]` (one product, two lanes): the input
-    /// work per unit mass over a substep, without the mode's load: `(p -
-    /// L)(u1 - u) + p' (h u1 - ∫u)` on the map, plus `delta` times the
-    /// integrand at its end, `(p - L) v`, with `v = V z` and `p = z_2 + h
-    /// z_3` there: its terms in `p` on the products, and `work_l` the row
-    /// that multiplies `-L` (on the sums of `z`); `∫ v²` on the map (its
-    /// quadratic form) plus `delta v²` at its end.
+    /// Pairs `[input, viscous]` per product: input work per unit mass over
+    /// a substep without the mode's load, `(p - L)(u1 - u) + p' (h u1 - ∫u)`
+    /// on the map plus `delta` times `(p - L) v` at its end (`v = V z`, `p =
+    /// z_2 + h z_3`), its terms in `p` (`work_l`: the row of `-L`, on the
+    /// sums of `z`); `∫ v²` on the map plus `delta v²` at its end.
     work_pv: [[f64; 2]; 10],
     work_l: [f64; 4],
     c: f64,
