@@ -323,7 +323,9 @@ impl Simulator {
     /// Advances to `t_end` under an excitation that is linear over
     /// `[now, t_end]` (values given at the current time).
     pub fn advance(&mut self, t_end: f64, exc: &Excitation) -> Result<(), SimError> {
-        self.advance_source(Plain(std::iter::once((t_end, *exc))))
+        // No source after it: the sweep then has no code to move on.
+        let law_changed = self.take_reference();
+        self.advance_source_from(Some((t_end, *exc)), Plain(std::iter::empty()), law_changed)
     }
 
     /// Advances through consecutive linear pieces, each given by its end
@@ -343,9 +345,9 @@ impl Simulator {
     /// On a prescribed support the mode at the call's start becomes the
     /// reference of the support's law (the master computed the inputs with
     /// it), after the support's drift is taken out ([`mode::support_law`]).
-    pub fn advance_source(&mut self, pieces: impl PieceSource) -> Result<(), SimError> {
+    pub fn advance_source(&mut self, mut pieces: impl PieceSource) -> Result<(), SimError> {
         let law_changed = self.take_reference();
-        self.advance_source_from(pieces, law_changed)
+        self.advance_source_from(pieces.next_piece(), pieces, law_changed)
     }
 
     /// As [`Simulator::advance`], but the support's law keeps its reference
@@ -359,15 +361,18 @@ impl Simulator {
         t_end: f64,
         exc: &Excitation,
     ) -> Result<(), SimError> {
-        self.advance_source_from(Plain(std::iter::once((t_end, *exc))), false)
+        self.advance_source_from(Some((t_end, *exc)), Plain(std::iter::empty()), false)
     }
 
+    /// From the `first` piece on, then `pieces`.
+    #[inline(always)]
     fn advance_source_from(
         &mut self,
+        first: Option<(f64, Excitation)>,
         mut pieces: impl PieceSource,
         mut law_changed: bool,
     ) -> Result<(), SimError> {
-        let mut pending = pieces.next_piece();
+        let mut pending = first;
         while let Some((t_end, exc)) = pending.take() {
             let mut piece = self.begin_piece(t_end, &exc, law_changed)?;
             law_changed = false;
@@ -405,14 +410,13 @@ impl Simulator {
     /// An error if any displacement or velocity is not finite.
     fn check_finite(&self) -> Result<(), SimError> {
         let n = self.sys.n;
-        if !(self.u[..=n]
-            .iter()
-            .chain(&self.v[..=n])
-            .all(|x| x.is_finite()))
-        {
-            return Err(SimError::NonFinite { t: self.t });
+        let (u, v) = (&self.u[..=n], &self.v[..=n]);
+        // Their sum first (`finite_terms`), each value only where it fails.
+        let sum = u.iter().zip(v).fold(0.0, |s, (a, b)| s + a + b);
+        if finite_terms(sum) || u.iter().chain(v).all(|x| x.is_finite()) {
+            return Ok(());
         }
-        Ok(())
+        Err(SimError::NonFinite { t: self.t })
     }
 
     /// Checks a piece from the current time and acts on a jump of the
@@ -422,7 +426,7 @@ impl Simulator {
     /// `law_changed`: the support's law changed at this instant
     /// ([`Simulator::take_reference`]), which can move it at once as a jump
     /// of `ag` does.
-    #[inline]
+    #[inline(always)]
     fn begin_piece(
         &mut self,
         t_end: f64,

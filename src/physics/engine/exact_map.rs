@@ -283,6 +283,11 @@ pub(super) struct MapCache {
     /// The last stretch length asked of [`MapCache::stretch_degree`] (its
     /// bits) and its degree: most substeps have the same length.
     last_degree: Option<(u64, usize)>,
+    /// The last substeps' rows (mass and length bit for bit: a master's calls
+    /// ask for a few lengths), with their maps; `rows_kept` in use.
+    rows: [([u64; 2], usize, Rows); 4],
+    rows_kept: usize,
+    rows_next: usize,
 }
 
 /// How many maps are kept (then the oldest is replaced).
@@ -304,6 +309,7 @@ impl MapCache {
             return i;
         }
         let map = ExactMap::new(sys, mass, h);
+        (self.rows_kept, self.rows_next) = (0, 0); // (rows of a replaced map)
         self.last = if self.maps.len() < CACHE_SIZE {
             if self.maps.is_empty() {
                 // Room for every map at once (no copies as the vector grows).
@@ -321,6 +327,28 @@ impl MapCache {
             i
         };
         self.last
+    }
+
+    /// The map and rows ([`Rows::new`]) of a substep of `mass` and length `h`.
+    #[inline(always)]
+    pub(super) fn rows(&mut self, sys: &System, mass: f64, h: f64) -> (&ExactMap, &Rows) {
+        let (_, i, rows) = &self.rows[self.rows_slot(sys, mass, h)];
+        (&self.maps[*i], rows)
+    }
+
+    /// Where [`MapCache::rows`] keeps them.
+    #[inline(never)]
+    fn rows_slot(&mut self, sys: &System, mass: f64, h: f64) -> usize {
+        let key = [mass.to_bits(), h.to_bits()];
+        if let Some(k) = self.rows[..self.rows_kept].iter().position(|r| r.0 == key) {
+            return k;
+        }
+        let i = self.index(sys, mass, canonical_length(h));
+        let k = self.rows_next;
+        self.rows_next = (k + 1) % self.rows.len();
+        self.rows_kept = self.rows_kept.max(k + 1);
+        self.rows[k] = (key, i, Rows::new(&self.maps[i], h));
+        k
     }
 
     pub(super) fn get(&self, i: usize) -> &ExactMap {

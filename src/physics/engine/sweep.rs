@@ -80,16 +80,16 @@ impl WorkSums {
     #[inline(never)]
     fn add_work(&self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
         let (s, l) = (&self.products, &self.linear);
-        let dot10 = |a: &[f64; 10]| -> f64 {
-            let mut x = 0.0;
-            for k in 0..10 {
-                x += a[k] * s[QUAD_ORDER[k]];
-            }
-            x
-        };
+        // Both forms at once, in two lanes (each summed in its own order).
+        let mut pv = [0.0; 2];
+        for k in 0..10 {
+            let x = s[QUAD_ORDER[k]];
+            pv[0] += rows.work_pv[k][0] * x;
+            pv[1] += rows.work_pv[k][1] * x;
+        }
         let with_load = dot(&rows.work_l, l);
-        work[0] += mass * (dot10(&rows.work_p) - load_accel * with_load);
-        work[1] += rows.c * dot10(&rows.work_v);
+        work[0] += mass * (pv[0] - load_accel * with_load);
+        work[1] += rows.c * pv[1];
     }
 }
 
@@ -205,9 +205,10 @@ impl Simulator {
         // The piece in locals (written back at the end): the loop reads
         // them every substep.
         let mut cur = *piece;
-        let first = maps.index(sys, mass, canonical_length(cur.h));
-        let mut map = maps.get(first);
-        let mut rows = Rows::new(map, cur.h);
+        // Kept rows (a master's calls: a few lengths); a piece of another
+        // length met on the way has its own.
+        let (mut map, mut rows) = maps.rows(sys, mass, cur.h);
+        let mut own_rows: Rows;
         let (mut row_u, mut row_v) = (rows.u, rows.v);
         // The upper clusters' terms in `A_c` over a substep of `h`.
         let terms = |h: f64| [0.5 * h * h, h].map(|k| accel_c.map(|a| k * a));
@@ -281,7 +282,7 @@ impl Simulator {
                         // A record's next sample: the same substeps, map and rows.
                         (cur.t_ref, cur.t_end, cur.exc, cur.i) = (t0, t_end, exc, 1);
                     } else {
-                        sums.flush(&rows, mass, load_accel, &mut work);
+                        sums.flush(rows, mass, load_accel, &mut work);
                         cur = Piece::new(t0, t_end, &exc, h_max);
                         let hc = canonical_length(cur.h);
                         if hc != map.h {
@@ -289,7 +290,8 @@ impl Simulator {
                             map = maps.get(i);
                             (w2, cm) = (map.w2, map.cm);
                         }
-                        rows = Rows::new(map, cur.h);
+                        own_rows = Rows::new(map, cur.h);
+                        rows = &own_rows;
                         (row_u, row_v) = (rows.u, rows.v);
                         [half_h2a, ha] = terms(cur.h);
                     }
@@ -445,7 +447,7 @@ impl Simulator {
         pieces.skip(lean[0]);
         *piece = cur;
         if taken > 0 {
-            sums.add_work(&rows, mass, load_accel, &mut work);
+            sums.add_work(rows, mass, load_accel, &mut work);
             // Input work on the upper clusters over the run, exact: with
             // v_c' = A_c - ag, -m ag v_c = d(m v_c²/2)/dt - m A_c v_c.
             let mut upper = 0.0;
@@ -530,15 +532,13 @@ fn continue_piece(
 pub(super) struct Rows {
     u: [f64; 4],
     v: [f64; 4],
-    /// Input work per unit mass over a substep, without the mode's load:
-    /// `(p - L)(u1 - u) + p' (h u1 - ∫u)` on the map, plus `delta` times
-    /// the integrand at its end, `(p - L) v`, with `v = V z` and `p = z_2 +
-    /// h z_3` there: its terms in `p` on the products, and `work_l` the row
-    /// that multiplies `-L` (on the sums of `z`).
-    work_p: [f64; 10],
+    /// Pairs `[input, viscous]` per product: input work per unit mass over
+    /// a substep without the mode's load, `(p - L)(u1 - u) + p' (h u1 - ∫u)`
+    /// on the map plus `delta` times `(p - L) v` at its end (`v = V z`, `p =
+    /// z_2 + h z_3`), its terms in `p` (`work_l`: the row of `-L`, on the
+    /// sums of `z`); `∫ v²` on the map plus `delta v²` at its end.
+    work_pv: [[f64; 2]; 10],
     work_l: [f64; 4],
-    /// `∫ v²` on the map (its quadratic form) plus `delta v²` at its end.
-    work_v: [f64; 10],
     c: f64,
 }
 
@@ -552,9 +552,11 @@ impl Rows {
         Rows {
             u: std::array::from_fn(|k| r.u[k] + delta * d.u[k]),
             v: std::array::from_fn(|k| r.v[k] + delta * d.v[k]),
-            work_p: std::array::from_fn(|k| r.work_p[k] + delta * d.work_p[k]),
+            work_pv: std::array::from_fn(|k| {
+                let (r, d) = (r.work_pv[k], d.work_pv[k]);
+                [r[0] + delta * d[0], r[1] + delta * d[1]]
+            }),
             work_l: std::array::from_fn(|k| r.work_l[k] + delta * d.work_l[k]),
-            work_v: std::array::from_fn(|k| r.work_v[k] + delta * d.work_v[k]),
             c: r.c,
         }
     }
@@ -569,23 +571,26 @@ impl Rows {
         let u0m1 = u[0] - 1.0;
         let w: [f64; 4] = std::array::from_fn(|j| hm * u[j] - map.int_u[j]);
         // Packed: 00, 11, 22, 33, 01, 02, 03, 12, 13, 23.
+        let pair = |p: [f64; 10], v: [f64; 10]| std::array::from_fn(|k| [p[k], v[k]]);
         let rows = Rows {
             u: *u,
             v: *v,
-            work_p: [
-                0.0,
-                0.0,
-                u[2],
-                w[3],
-                0.0,
-                u0m1,
-                w[0],
-                u[1],
-                w[1],
-                u[3] + w[2],
-            ],
+            work_pv: pair(
+                [
+                    0.0,
+                    0.0,
+                    u[2],
+                    w[3],
+                    0.0,
+                    u0m1,
+                    w[0],
+                    u[1],
+                    w[1],
+                    u[3] + w[2],
+                ],
+                map.quad,
+            ),
             work_l: [u0m1, u[1], u[2], u[3]],
-            work_v: map.quad,
             c: map.c,
         };
         // The rest `delta`, to first order: u' = v, v' the acceleration;
@@ -595,31 +600,33 @@ impl Rows {
         let rate = Rows {
             u: *v,
             v: accel,
-            work_p: [
-                0.0,
-                0.0,
-                v[2],
-                hv[3],
-                0.0,
-                v[0],
-                hv[0],
-                v[1],
-                hv[1],
-                v[3] + hv[2],
-            ],
+            work_pv: pair(
+                [
+                    0.0,
+                    0.0,
+                    v[2],
+                    hv[3],
+                    0.0,
+                    v[0],
+                    hv[0],
+                    v[1],
+                    hv[1],
+                    v[3] + hv[2],
+                ],
+                [
+                    v[0] * v[0],
+                    v[1] * v[1],
+                    v[2] * v[2],
+                    v[3] * v[3],
+                    2.0 * v[0] * v[1],
+                    2.0 * v[0] * v[2],
+                    2.0 * v[0] * v[3],
+                    2.0 * v[1] * v[2],
+                    2.0 * v[1] * v[3],
+                    2.0 * v[2] * v[3],
+                ],
+            ),
             work_l: *v,
-            work_v: [
-                v[0] * v[0],
-                v[1] * v[1],
-                v[2] * v[2],
-                v[3] * v[3],
-                2.0 * v[0] * v[1],
-                2.0 * v[0] * v[2],
-                2.0 * v[0] * v[3],
-                2.0 * v[1] * v[2],
-                2.0 * v[1] * v[3],
-                2.0 * v[2] * v[3],
-            ],
             c: 0.0,
         };
         [rows, rate]
