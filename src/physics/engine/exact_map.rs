@@ -283,12 +283,15 @@ pub(super) struct MapCache {
     /// The last stretch length asked of [`MapCache::stretch_degree`] (its
     /// bits) and its degree: most substeps have the same length.
     last_degree: Option<(u64, usize)>,
-    /// The last substeps' rows (mass and length bit for bit: a master's calls
-    /// ask for a few lengths), with their maps; `rows_kept` in use.
-    rows: [([u64; 2], usize, Rows); 4],
-    rows_kept: usize,
-    rows_next: usize,
+    /// Substeps' rows with their maps, one slot per hash of their mass and
+    /// length (bit for bit: a master's calls ask for a few lengths, which
+    /// differ by the rounding of the times). The key is `[!mass, h]`: a
+    /// zeroed slot matches no mass (its complement would be a NaN).
+    rows: [([u64; 2], usize, Rows); ROW_SLOTS],
 }
+
+/// Slots of [`MapCache::rows`].
+const ROW_SLOTS: usize = 8;
 
 /// How many maps are kept (then the oldest is replaced).
 const CACHE_SIZE: usize = 16;
@@ -309,7 +312,7 @@ impl MapCache {
             return i;
         }
         let map = ExactMap::new(sys, mass, h);
-        (self.rows_kept, self.rows_next) = (0, 0); // (rows of a replaced map)
+        self.rows.iter_mut().for_each(|r| r.0 = [0; 2]); // (rows of a replaced map)
         self.last = if self.maps.len() < CACHE_SIZE {
             if self.maps.is_empty() {
                 // Room for every map at once (no copies as the vector grows).
@@ -339,16 +342,22 @@ impl MapCache {
     /// Where [`MapCache::rows`] keeps them.
     #[inline(never)]
     fn rows_slot(&mut self, sys: &System, mass: f64, h: f64) -> usize {
-        let key = [mass.to_bits(), h.to_bits()];
-        if let Some(k) = self.rows[..self.rows_kept].iter().position(|r| r.0 == key) {
-            return k;
+        let key = [!mass.to_bits(), h.to_bits()];
+        // Fibonacci hashing: the lengths differ in their low bits.
+        let hash = (key[0] ^ key[1]).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let k = (hash >> (64 - ROW_SLOTS.trailing_zeros())) as usize;
+        if self.rows[k].0 != key {
+            self.fill_rows(k, key, sys, mass, h);
         }
-        let i = self.index(sys, mass, canonical_length(h));
-        let k = self.rows_next;
-        self.rows_next = (k + 1) % self.rows.len();
-        self.rows_kept = self.rows_kept.max(k + 1);
-        self.rows[k] = (key, i, Rows::new(&self.maps[i], h));
         k
+    }
+
+    /// Slot `k` for `key` (out of line: rare).
+    #[cold]
+    #[inline(never)]
+    fn fill_rows(&mut self, k: usize, key: [u64; 2], sys: &System, mass: f64, h: f64) {
+        let i = self.index(sys, mass, canonical_length(h));
+        self.rows[k] = (key, i, Rows::new(&self.maps[i], h));
     }
 
     pub(super) fn get(&self, i: usize) -> &ExactMap {
