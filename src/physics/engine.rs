@@ -373,7 +373,8 @@ impl Simulator {
         mut law_changed: bool,
     ) -> Result<(), SimError> {
         let mut pending = first;
-        while let Some((t_end, exc)) = pending.take() {
+        // (Every pass sets `pending` anew.)
+        while let Some((t_end, exc)) = pending {
             let mut piece = self.begin_piece(t_end, &exc, law_changed)?;
             law_changed = false;
             match self.settings.method {
