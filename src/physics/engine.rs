@@ -446,7 +446,8 @@ impl Simulator {
         }
         // On a prescribed support a jump of `ag` moves the support's cluster
         // at once, as a jump of `Fext` a structure's.
-        if pieces::is_jump(exc.fext, self.fext_now)
+        // (An unchanged `Fext`, most calls, without the test's arithmetic.)
+        if (exc.fext != self.fext_now && pieces::is_jump(exc.fext, self.fext_now))
             || (prescribed && (law_changed || pieces::is_jump(exc.ag, self.ag_now)))
         {
             self.fire_at_jump(exc);
