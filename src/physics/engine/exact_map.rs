@@ -283,15 +283,11 @@ pub(super) struct MapCache {
     /// The last stretch length asked of [`MapCache::stretch_degree`] (its
     /// bits) and its degree: most substeps have the same length.
     last_degree: Option<(u64, usize)>,
-    /// Substeps' rows with their maps, one slot per hash of their mass and
-    /// length (bit for bit: a master's calls ask for a few lengths, which
-    /// differ by the rounding of the times). The key is `[!mass, h]`: a
-    /// zeroed slot matches no mass (its complement would be a NaN).
-    rows: [([u64; 2], usize, Rows); ROW_SLOTS],
+    /// Substeps' rows with their maps, a slot per hash of mass and length
+    /// (bit for bit: a master's few, differing by the times' rounding), keyed
+    /// `[!mass, h]`: a zeroed slot matches no mass (it would be a NaN).
+    rows: [([u64; 2], usize, Rows); 8],
 }
-
-/// Slots of [`MapCache::rows`].
-const ROW_SLOTS: usize = 8;
 
 /// How many maps are kept (then the oldest is replaced).
 const CACHE_SIZE: usize = 16;
@@ -345,7 +341,7 @@ impl MapCache {
         let key = [!mass.to_bits(), h.to_bits()];
         // Fibonacci hashing: the lengths differ in their low bits.
         let hash = (key[0] ^ key[1]).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        let k = (hash >> (64 - ROW_SLOTS.trailing_zeros())) as usize;
+        let k = (hash >> (64 - self.rows.len().trailing_zeros())) as usize;
         if self.rows[k].0 != key {
             self.fill_rows(k, key, sys, mass, h);
         }
