@@ -21,8 +21,9 @@
 use super::sweep::Rows;
 use crate::physics::system::System;
 
-/// Highest degree of the Taylor sum of `exp(A h)` ([`degree`]).
-const MAX_DEGREE: usize = 20;
+/// Highest degree of the Taylor sum of `exp(A h)` ([`degree`]'s at
+/// `ω h = 0.5` as ζ tends to 1, `ρ = 1.5`).
+const MAX_DEGREE: usize = 21;
 /// Extra terms kept for the derivative bounds (up to `v^(5)`).
 const TERMS: usize = MAX_DEGREE + 6;
 /// `1 / (n + 1)`, for the weights of `∫ v²`.
@@ -517,10 +518,10 @@ mod tests {
     #[test]
     fn the_rest_of_the_taylor_sum_is_below_rounding() {
         // Expected: [`degree`]'s bound of the rest, `(2 + 2/ρ) Σ_(j>k) ρ^j/j!`,
-        // below half a unit round-off at every ρ from 1e-7 to ω h = 0.5 with
-        // ζ = 0.5 (ρ = 1; w2 = 1, cm = 0 make ρ = h).
+        // below half a unit round-off at every ρ from 1e-7 to ω h = 0.5 as
+        // ζ tends to 1 (ρ = 1.5; w2 = 1, cm = 0 make ρ = h).
         for i in 0..=700 {
-            let rho = 10f64.powf(-i as f64 / 100.0);
+            let rho = 1.5 * 10f64.powf(-i as f64 / 100.0);
             let k = degree(rho, 1.0, 0.0);
             let (mut term, mut rest) = ((1..=k).fold(1.0, |t, j| t * rho / j as f64), 0.0);
             for j in k + 1..k + 40 {
