@@ -204,7 +204,7 @@ impl Simulator {
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
         // The piece in locals (written back at the end): the loop reads
         // them every substep.
-        let mut cur = *piece;
+        let mut cur = piece.read_by_field();
         // Kept rows (a master's calls: a few lengths); a piece of another
         // length met on the way has its own.
         let (mut map, mut rows) = maps.rows(sys, mass, cur.h);
