@@ -267,7 +267,7 @@ impl Dynamics {
     }
 
     /// The clusters, masses and forces of `mode` only, without its guards
-    /// (the part [`cluster_law`] follows operation for operation).
+    /// (the part `cluster_law` follows operation for operation).
     pub fn clusters(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics {
             n_clusters: 0,

@@ -60,12 +60,16 @@ const FALLING: [[f64; TERMS + 1]; 6] = {
 };
 
 /// Degree of the Taylor sum of `exp(A h) z`: the first `k >= 4` with
-/// `ρ^k / k! < 1e-16`, `ρ = h max(ω + c/m, 1)`. In the energy's norm
-/// `|[ω u, v]|` the oscillator's block of `A h` is at most `ρ`, and the
-/// forcing enters as `h p` and `h² p'`, so the terms past `k` sum to at most
-/// `(2 + 2/ρ) Σ_(j>k) ρ^j / j! < 2e-16 (1 + ρ) / (k + 1 - ρ)`, about 4e-17,
-/// of `max(|[ω u, v]|, |p| / (ω + c/m))` (the state and the forcing's static
-/// response): below the rounding of the sums (1.1e-16).
+/// `ρ^k / k! < 1e-16`, `ρ = h max(ω + c/m, 1)`, at most `MAX_DEGREE`. In the
+/// energy's norm `|[ω u, v]|` the oscillator's block of `A h` is at most
+/// `h (ω + c/m) <= ρ`, and the forcing enters as `h p` and `h² p'`, so the
+/// terms past `k` sum to at most `(2 + 2/ρ) Σ_(j>k) ρ^j / j! < 2e-16 (1 +
+/// ρ) / (k + 1 - ρ)`, about 4e-17, of `max(|[ω u, v]|, (|p| + h |p'|) / (ω +
+/// c/m))` (the state and the forcing's static response over the substep):
+/// below the rounding of the sums (1.1e-16). (`h (ω + c/m) <= 0.5 (1 + 2ζ)
+/// < 1.5`, where degree 21 meets the threshold; a long substep of a slow
+/// structure, `ω + c/m < 1`, has `ρ > h (ω + c/m)` and may take all 21
+/// terms, more than it needs.)
 pub(super) fn degree(h: f64, w2: f64, cm: f64) -> usize {
     let rho = h * (w2.sqrt() + cm).max(1.0);
     let mut term = 1.0;
