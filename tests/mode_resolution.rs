@@ -15,10 +15,26 @@ struct Case {
 }
 
 fn random_case(rng: &mut Rng, static_factor: (f64, f64)) -> Case {
+    let (lo, hi) = static_factor;
+    random_request(rng, |rng| rng.uniform(lo, hi), false)
+}
+
+/// A random request: N = 1..8, random masses, a tenth of the interfaces
+/// frictionless, `mus = muk` times `static_factor`'s draw; on a prescribed
+/// support (`prescribed`) most with a mobility and a reference mode of
+/// their own.
+fn random_request(
+    rng: &mut Rng,
+    mut static_factor: impl FnMut(&mut Rng) -> f64,
+    prescribed: bool,
+) -> Case {
     let mut p = Params {
         n_blocks: 1 + rng.below(8),
         ..Params::default()
     };
+    if prescribed {
+        p.support = stacked_live_load::Support::Prescribed;
+    }
     for j in 0..p.n_blocks {
         p.alpha[j] = rng.uniform(0.05, 1.5);
         let mu = if rng.next_f64() < 0.1 {
@@ -27,9 +43,14 @@ fn random_case(rng: &mut Rng, static_factor: (f64, f64)) -> Case {
             rng.uniform(0.02, 0.6)
         };
         p.muk[j] = mu;
-        p.mus[j] = mu * rng.uniform(static_factor.0, static_factor.1);
+        p.mus[j] = mu * static_factor(rng);
     }
-    let sys = System::new(&p).unwrap();
+    let mut sys = System::new(&p).unwrap();
+    if prescribed && rng.next_f64() < 0.7 {
+        sys.mobility = rng.uniform(0.0, 2.0) / p.mp;
+        sys.ref_mass = rng.uniform(0.0, 1.0) * sys.mass_up[1][sys.n + 1];
+        sys.ref_load = rng.uniform(-1.0, 1.0) * sys.normal[1] * 0.6;
+    }
     let mut mode = Mode::all_stuck(&sys);
     let (mut zero, mut was_stuck) = (0u32, 0u32);
     for j in 1..=sys.n {
@@ -50,9 +71,13 @@ fn random_case(rng: &mut Rng, static_factor: (f64, f64)) -> Case {
         }
     }
     // Spring, damper and external force on the structure: up to a few times
-    // the friction capacity, so that both sticking and slipping occur.
-    let capacity = sys.normal[1] * 0.6;
-    let load0 = rng.uniform(-3.0, 3.0) * capacity;
+    // the friction capacity, so that both sticking and slipping occur (on a
+    // support, its acceleration, m/s2, to a few times the friction's).
+    let load0 = if prescribed {
+        rng.uniform(-3.0, 3.0) * 0.6 * sys.g
+    } else {
+        rng.uniform(-3.0, 3.0) * sys.normal[1] * 0.6
+    };
     Case {
         sys,
         req: ResolveRequest {
@@ -316,70 +341,6 @@ fn the_walk_decides_exactly_as_the_enumeration_of_every_assignment() {
     assert!(ambiguous > 300 && breaking > 1000, "{ambiguous} {breaking}");
 }
 
-/// A request on a stack of mixed friction (each interface μs = μk or μs >
-/// μk, a tenth frictionless), on a structure or a prescribed support (most
-/// with a mobility and a reference mode of their own).
-fn mixed_case(rng: &mut Rng, prescribed: bool) -> Case {
-    let mut p = Params {
-        n_blocks: 1 + rng.below(8),
-        ..Params::default()
-    };
-    if prescribed {
-        p.support = stacked_live_load::Support::Prescribed;
-    }
-    for j in 0..p.n_blocks {
-        p.alpha[j] = rng.uniform(0.05, 1.5);
-        let mu = if rng.next_f64() < 0.1 {
-            0.0
-        } else {
-            rng.uniform(0.02, 0.6)
-        };
-        p.muk[j] = mu;
-        p.mus[j] = if rng.next_f64() < 0.5 {
-            mu
-        } else {
-            mu * rng.uniform(1.05, 2.5)
-        };
-    }
-    let mut sys = System::new(&p).unwrap();
-    if prescribed && rng.next_f64() < 0.7 {
-        sys.mobility = rng.uniform(0.0, 2.0) / p.mp;
-        sys.ref_mass = rng.uniform(0.0, 1.0) * sys.mass_up[1][sys.n + 1];
-        sys.ref_load = rng.uniform(-1.0, 1.0) * sys.normal[1] * 0.6;
-    }
-    let mut mode = Mode::all_stuck(&sys);
-    let (mut zero, mut was_stuck) = (0u32, 0u32);
-    for j in (1..=sys.n).filter(|&j| !sys.is_free(j)) {
-        if rng.next_f64() < 0.5 {
-            zero |= 1 << j;
-            if rng.next_f64() < 0.5 {
-                was_stuck |= 1 << j;
-            }
-        } else if rng.next_f64() < 0.5 {
-            mode.contact[j] = Contact::SlipForward;
-        } else {
-            mode.contact[j] = Contact::SlipBackward;
-        }
-    }
-    // On a support the load is its acceleration (m/s2), else a force (N).
-    let load0 = if prescribed {
-        rng.uniform(-3.0, 3.0) * 0.6 * sys.g
-    } else {
-        rng.uniform(-3.0, 3.0) * sys.normal[1] * 0.6
-    };
-    let mut req = ResolveRequest {
-        mode,
-        zero,
-        must_break: 0,
-        was_stuck,
-        load0,
-    };
-    if rng.next_f64() < 0.3 {
-        req.must_break = req.zero & req.was_stuck;
-    }
-    Case { sys, req }
-}
-
 #[test]
 fn the_walk_decides_as_the_enumeration_on_supports_and_mixed_friction() {
     // As the test above, on what its cases lack (found by a review): stacks
@@ -392,7 +353,18 @@ fn the_walk_decides_as_the_enumeration_on_supports_and_mixed_friction() {
     let (mut ambiguous, mut on_support) = (0, 0);
     for i in 0..4000 {
         let prescribed = i % 2 == 1;
-        let case = mixed_case(&mut rng, prescribed);
+        // Each interface μs = μk or μs > μk.
+        let mixed = |rng: &mut Rng| {
+            if rng.next_f64() < 0.5 {
+                1.0
+            } else {
+                rng.uniform(1.05, 2.5)
+            }
+        };
+        let mut case = random_request(&mut rng, mixed, prescribed);
+        if rng.next_f64() < 0.3 {
+            case.req.must_break = case.req.zero & case.req.was_stuck;
+        }
         let walk = mode::resolve(&case.sys, &case.req);
         let all = mode::resolve_by_enumeration(&case.sys, &case.req);
         assert_eq!(walk.mode, all.mode, "case {i}: {:?}", case.req);
