@@ -813,9 +813,9 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     // with mus > muk; the bounded walk may have skipped the others.
     let ambiguous = !walk.all_equal_friction()
         && (search.count > 1 || {
-            let all = walk.search(false, 2);
-            search.tries += all.tries;
-            all.count > 1
+            let (second, tries) = walk.second_consistent();
+            search.tries += tries;
+            second
         });
     Resolved {
         mode,
@@ -880,9 +880,8 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 
 /// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
 /// [`only_consistent`] covers every rival (one slip: all but `mode` with it stuck, checked;
-/// a free interface in `zero` fails it), else whether the walk without its bound finds a
-/// second consistent assignment (the best is known: the bounded walk is not needed). Out of
-/// line: inlined, the walk moved the sweep's code (the bare structure 7% slower).
+/// a free interface in `zero` fails it), else [`Walk::second_consistent`]. Out of line:
+/// inlined, the walk moved the sweep's code (the bare structure 7% slower).
 #[inline(never)]
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
     let (zero, slips) = (req.zero, req.zero & req.must_break);
@@ -901,8 +900,8 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
             _ => false,
         };
     (!proved)
-        .then(|| Walk::new(sys, req).search(false, 2))
-        .map_or((false, 0), |all| (all.count > 1, all.tries))
+        .then(|| Walk::new(sys, req).second_consistent())
+        .unwrap_or((false, 0))
 }
 
 /// Whether no consistent assignment differs from `mode` at `ifaces` by
@@ -1067,6 +1066,12 @@ impl<'a> Walk<'a> {
         (1..self.sys.n + 1)
             .filter(|&j| self.index[j] != usize::MAX)
             .all(|j| self.sys.mus[j] == self.sys.muk[j])
+    }
+
+    /// Whether a second consistent assignment exists (ambiguity), and tries.
+    fn second_consistent(&self) -> (bool, u32) {
+        let all = self.search(false, 2);
+        (all.count > 1, all.tries)
     }
 
     /// Walks the assignments: `bound`, and at most `limit` consistent ones.

@@ -67,9 +67,8 @@ const FALLING: [[f64; TERMS + 1]; 6] = {
 /// ρ) / (k + 1 - ρ)`, about 4e-17, of `max(|[ω u, v]|, (|p| + h |p'|) / (ω +
 /// c/m))` (the state and the forcing's static response over the substep):
 /// below the rounding of the sums (1.1e-16). (`h (ω + c/m) <= 0.5 (1 + 2ζ)
-/// < 1.5`, where degree 21 meets the threshold; a long substep of a slow
-/// structure, `ω + c/m < 1`, has `ρ > h (ω + c/m)` and may take all 21
-/// terms, more than it needs.)
+/// < 1.5`, met by degree 21; a long substep of a slow structure, `ω + c/m
+/// < 1`, may take all 21 terms, more than it needs.)
 pub(super) fn degree(h: f64, w2: f64, cm: f64) -> usize {
     let rho = h * (w2.sqrt() + cm).max(1.0);
     let mut term = 1.0;

@@ -230,8 +230,7 @@ impl Piece {
     /// one-substep call, measured; the bare structure's record path +2 %).
     #[inline(always)]
     pub(super) fn read_by_field(&self) -> Piece {
-        // SAFETY: each read is of a field of a live, aligned reference;
-        // volatile only so that the reads are not merged into wider ones.
+        // SAFETY: fields of a live reference (volatile: never merged wider).
         let x = |field: &f64| unsafe { std::ptr::read_volatile(field) };
         let k = |field: &usize| unsafe { std::ptr::read_volatile(field) };
         let e = &self.exc;

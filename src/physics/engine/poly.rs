@@ -87,17 +87,11 @@ impl Poly {
         self.deg = p.deg;
     }
 
-    /// For a guard that is zero at `s = 0` up to rounding: `p / s^m`, `m`
-    /// its leading coefficients at rounding level (at most three), which has
-    /// the zeros of `p` in (0, 1]. `None` when the first coefficient left is
-    /// negative: the guard does not grow from its zero.
-    pub(super) fn past_zero_start(&self) -> Option<Poly> {
-        let mut p = *self;
-        p.divide_zero_start().then_some(p)
-    }
-
-    /// [`Poly::past_zero_start`] in place: false (`self` unchanged) where it
-    /// is `None`.
+    /// For a guard that is zero at `s = 0` up to rounding: `p / s^m` in
+    /// place, `m` its leading coefficients at rounding level (at most
+    /// three), which has the zeros of `p` in (0, 1]. False (`self`
+    /// unchanged) when the first coefficient left is negative: the guard
+    /// does not grow from its zero.
     pub(super) fn divide_zero_start(&mut self) -> bool {
         let scale: f64 = self.c[1..self.deg + 1].iter().map(|c| c.abs()).sum();
         let m = (0..self.deg.min(3) + 1).find(|&k| self.c[k].abs() > 1e-12 * scale);
@@ -321,10 +315,12 @@ pub(super) fn raise_peak_inside(
     if lead < 0.0 {
         g.negate();
     }
-    let past = (g.c[0] <= 1e-12 * scale)
-        .then(|| g.past_zero_start())
-        .flatten();
-    let start = past.as_ref().unwrap_or(&g);
+    let mut past = g;
+    let start = if g.c[0] <= 1e-12 * scale && past.divide_zero_start() {
+        &past
+    } else {
+        &g
+    };
     let (g0, d0) = start.eval_d(0.0);
     let mut zero = first_zero(start, start.bounds(), [0.0, g0.max(0.0), d0], e, tol)?;
     let bounds = g.bounds(); // the same for either sign
@@ -492,9 +488,11 @@ mod tests {
         assert_eq!(first_zero_from_start(&graze), None);
         // A guard at zero that grows as s²: searched past its zero start.
         let g = poly(&[0.0, 0.0, 1.0, -1.6]); // s²(1 - 1.6 s): zero at 0.625
-        let past = g.past_zero_start().unwrap();
+        let mut past = g;
+        assert!(past.divide_zero_start());
         assert!((first_zero_from_start(&past).unwrap() - 0.625).abs() < 1e-12);
-        assert!(poly(&[0.0, -1.0, 3.0]).past_zero_start().is_none());
+        let mut falling = poly(&[0.0, -1.0, 3.0]);
+        assert!(!falling.divide_zero_start() && falling.deg == 2);
         // A guard hovering 1e-18 above zero over a stretch of ~0.01
         // (1e-18 + 1e-3 (s - 0.5)^6): no proof reaches across it within
         // the budget, and the search says so instead of guessing.
