@@ -311,6 +311,21 @@ fn an_interface_at_its_static_limit_breaks() {
     assert_eq!(res.mode.contact[1], Contact::Stuck);
 }
 
+/// Case `i`, with the stuck interfaces at zero made to break three times in
+/// ten: the walk's resolution, asserted the same as the enumeration's
+/// (mode, consistency, ambiguity).
+fn decided_as_the_enumeration(rng: &mut Rng, case: &mut Case, i: usize) -> mode::Resolved {
+    if rng.next_f64() < 0.3 {
+        case.req.must_break = case.req.zero & case.req.was_stuck;
+    }
+    let walk = mode::resolve(&case.sys, &case.req);
+    let all = mode::resolve_by_enumeration(&case.sys, &case.req);
+    assert_eq!(walk.mode, all.mode, "case {i}: {:?}", case.req);
+    assert_eq!(walk.consistent, all.consistent, "case {i}: {:?}", case.req);
+    assert_eq!(walk.ambiguous, all.ambiguous, "case {i}: {:?}", case.req);
+    walk
+}
+
 #[test]
 fn the_walk_decides_exactly_as_the_enumeration_of_every_assignment() {
     // `mode::resolve` walks the stack and drops inconsistent branches;
@@ -327,14 +342,7 @@ fn the_walk_decides_exactly_as_the_enumeration_of_every_assignment() {
     for i in 0..6000 {
         let factor = if i % 2 == 0 { (1.0, 1.0) } else { (1.05, 2.5) };
         let mut case = random_case(&mut rng, factor);
-        if rng.next_f64() < 0.3 {
-            case.req.must_break = case.req.zero & case.req.was_stuck;
-        }
-        let walk = mode::resolve(&case.sys, &case.req);
-        let all = mode::resolve_by_enumeration(&case.sys, &case.req);
-        assert_eq!(walk.mode, all.mode, "case {i}: {:?}", case.req);
-        assert_eq!(walk.consistent, all.consistent, "case {i}");
-        assert_eq!(walk.ambiguous, all.ambiguous, "case {i}");
+        let walk = decided_as_the_enumeration(&mut rng, &mut case, i);
         ambiguous += usize::from(walk.ambiguous);
         breaking += usize::from(case.req.must_break != 0);
     }
@@ -362,14 +370,7 @@ fn the_walk_decides_as_the_enumeration_on_supports_and_mixed_friction() {
             }
         };
         let mut case = random_request(&mut rng, mixed, prescribed);
-        if rng.next_f64() < 0.3 {
-            case.req.must_break = case.req.zero & case.req.was_stuck;
-        }
-        let walk = mode::resolve(&case.sys, &case.req);
-        let all = mode::resolve_by_enumeration(&case.sys, &case.req);
-        assert_eq!(walk.mode, all.mode, "case {i}: {:?}", case.req);
-        assert_eq!(walk.consistent, all.consistent, "case {i}");
-        assert_eq!(walk.ambiguous, all.ambiguous, "case {i}: {:?}", case.req);
+        let walk = decided_as_the_enumeration(&mut rng, &mut case, i);
         ambiguous += usize::from(walk.ambiguous);
         on_support += usize::from(prescribed && walk.ambiguous);
     }
