@@ -235,18 +235,20 @@ impl Simulator {
     }
 
     /// Fires the located guard `j` whatever its sign after rounding, and
-    /// every other guard not `muted` that has reached zero too; counts the
-    /// step's `events` and mutes every guard after `MAX_EVENTS_PER_STEP`.
+    /// every other guard `searched` over the stretch and not `muted` that
+    /// has reached zero too (the others were proved positive over it);
+    /// counts the step's `events` and mutes every guard after
+    /// `MAX_EVENTS_PER_STEP`.
     pub(super) fn fire_located(
         &mut self,
         exc: &Excitation,
         t_ref: f64,
-        j: usize,
+        [j, searched]: [u32; 2],
         muted: &mut u32,
         events: &mut u32,
     ) {
         let all = self.all_interfaces();
-        self.fire_violated(exc, t_ref, all & !*muted, 1 << j);
+        self.fire_violated(exc, t_ref, searched & !*muted, 1 << j);
         *events += 1;
         if *events >= MAX_EVENTS_PER_STEP {
             *muted = all;
@@ -336,9 +338,8 @@ impl DynamicsCache {
     #[cold]
     #[inline(never)]
     fn insert(&mut self, key: u32, sys: &System, mode: &Mode, out: &mut Dynamics) {
-        let d = Dynamics::new(sys, mode);
-        *out = d;
-        if self.keys.len() < DYNAMICS_CACHE_SIZE {
+        // Built where it is kept, then copied once.
+        let i = if self.keys.len() < DYNAMICS_CACHE_SIZE {
             if self.keys.is_empty() {
                 // Room for every entry at once: a growing vector would copy
                 // the dynamics kept so far at each doubling.
@@ -346,14 +347,16 @@ impl DynamicsCache {
                 self.dynamics.reserve_exact(DYNAMICS_CACHE_SIZE);
             }
             self.keys.push(key);
-            self.dynamics.push(d);
-            self.hint[DynamicsCache::slot(key)] = self.keys.len() as u8;
+            self.dynamics.push(Dynamics::new(sys, mode));
+            self.keys.len() - 1
         } else {
             let i = self.next;
             self.keys[i] = key;
-            self.dynamics[i] = d;
+            self.dynamics[i] = Dynamics::new(sys, mode);
             self.next = (i + 1) % DYNAMICS_CACHE_SIZE;
-            self.hint[DynamicsCache::slot(key)] = (i + 1) as u8;
-        }
+            i
+        };
+        self.hint[DynamicsCache::slot(key)] = (i + 1) as u8;
+        *out = self.dynamics[i];
     }
 }

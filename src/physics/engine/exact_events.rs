@@ -309,8 +309,9 @@ enum Next {
     /// Guards violated from the start with no positive stretch after it.
     AtOnce(u32),
     /// The first zero (fraction of the stretch) and its interface; `None`:
-    /// no guard reaches zero before the substep's end.
-    Event(Option<(f64, usize)>),
+    /// no guard reaches zero before the substep's end. With the guards
+    /// searched (the others are proved positive over the whole stretch).
+    Event(Option<(f64, usize)>, u32),
 }
 
 impl Simulator {
@@ -367,7 +368,7 @@ impl Simulator {
                         self.fire_violated(exc, t_ref, 0, fire);
                     }
                 }
-                Next::Event(event) => {
+                Next::Event(event, searched) => {
                     let s = event.map_or(1.0, |(s, _)| s);
                     if self
                         .take_exact(&mut flow, s, tol, muted, ends_only)
@@ -382,7 +383,8 @@ impl Simulator {
                         self.t = t1;
                     }
                     if let Some((_, j)) = event {
-                        self.fire_located(exc, t_ref, j, &mut muted, &mut events);
+                        let located = [j as u32, searched];
+                        self.fire_located(exc, t_ref, located, &mut muted, &mut events);
                     }
                 }
             }
@@ -427,7 +429,7 @@ impl Simulator {
         let d = &self.dynamics;
         let mut ifaces = d.changing_guards;
         let mut earliest: Option<(f64, usize)> = None;
-        let mut at_once = 0u32;
+        let (mut at_once, mut searched) = (0u32, 0u32);
         // Every stick of the structure's cluster at once: the acceleration
         // kept inside the band inside all of them (then each guard's own
         // test, on a wider band, returns no polynomial either).
@@ -449,6 +451,7 @@ impl Simulator {
             if flow.holds(self, g) {
                 continue;
             }
+            searched |= 1 << j;
             let n_polys = flow.guard_polys(self, g, polys);
             for (poly, scale) in &mut polys[..n_polys] {
                 // A guard at zero (a contact that has just switched) must
@@ -472,7 +475,7 @@ impl Simulator {
         Ok(if at_once != 0 {
             Next::AtOnce(at_once)
         } else {
-            Next::Event(earliest)
+            Next::Event(earliest, searched)
         })
     }
 
