@@ -36,7 +36,14 @@ use crate::physics::mode::{Guard, Moving};
 /// `u` and `v` of the structure's cluster over a stretch of length `h` from
 /// `z = [u, v, p, p']` as polynomials of degree `deg` in `s = τ / h`: the
 /// Taylor terms `(A h)^k z / k!`, whose u and v parts are the coefficients.
-fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, [u, v]: [&mut Poly; 2]) {
+/// Returns their spreads (`Poly::spread(1)`, summed as they come).
+fn taylor_uv(
+    z: [f64; 4],
+    h: f64,
+    [w2, cm]: [f64; 2],
+    deg: usize,
+    [u, v]: [&mut Poly; 2],
+) -> [f64; 2] {
     // The forcing's part `[p, p']` is linear in time: after two terms its
     // entries are `f · 0.0 = +0.0` (`f > 0`), left out of the rest (the
     // same values: `0.0 - w2 u` is computed as before).
@@ -46,9 +53,11 @@ fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, [u, v]: [&mut 
     let p1 = f * p_rate;
     [y0, y1] = [f * y1, f * (p - w2 * y0 - cm * y1)];
     (u.c[1], v.c[1]) = (y0, y1);
+    let mut spreads = [y0.abs(), y1.abs()];
     let f = h * INV[1];
     [y0, y1] = [f * y1, f * (p1 - w2 * y0 - cm * y1)];
     (u.c[2], v.c[2]) = (y0, y1);
+    spreads = [spreads[0] + y0.abs(), spreads[1] + y1.abs()];
     let terms = u.c[3..=deg]
         .iter_mut()
         .zip(&mut v.c[3..=deg])
@@ -57,8 +66,10 @@ fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, [u, v]: [&mut 
         let f = h * inv;
         [y0, y1] = [f * y1, f * (0.0 - w2 * y0 - cm * y1)];
         (*uk, *vk) = (y0, y1);
+        spreads = [spreads[0] + y0.abs(), spreads[1] + y1.abs()];
     }
     (u.deg, v.deg) = (deg, deg);
+    spreads
 }
 
 /// For the driver (`sweep.rs`), over one whole substep from `z` where its
@@ -138,15 +149,13 @@ impl Flow {
         let q0 = d.input_accel(ag0, fext0) - ag0;
         let p0 = d.load_accel0 + q0;
         let p1 = d.input_accel(exc.ag_rate, exc.fext_rate) - exc.ag_rate;
-        taylor_uv(
+        [self.u_spread, self.v_spread] = taylor_uv(
             [sim.u[0], sim.v[0], p0, p1],
             h,
             [w2, cm],
             deg,
             [&mut self.u, &mut self.v],
         );
-        self.u_spread = self.u.spread(1.0);
-        self.v_spread = self.v.spread(1.0);
         self.accel_linear = [p0 + ag0, p1 + exc.ag_rate];
         self.accel_start = p0 + ag0 - w2 * sim.u[0] - cm * sim.v[0];
         self.accel_spread_bound =
