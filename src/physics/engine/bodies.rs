@@ -43,13 +43,14 @@ pub(crate) fn move_bodies(
     let u0_before = u[0];
     u[0] = u0;
     v[0] = v_cluster[0];
-    for i in 1..=n {
-        let c = d.cluster_of[i];
-        u[i] = if c == 0 {
-            u0 + (u[i] - u0_before)
+    // (Zipped: no bounds check per body.)
+    let bodies = u[1..=n].iter_mut().zip(&mut v[1..=n]);
+    for ((ui, vi), &c) in bodies.zip(&d.cluster_of[1..=n]) {
+        *ui = if c == 0 {
+            u0 + (*ui - u0_before)
         } else {
-            u[i] + du[c]
+            *ui + du[c]
         };
-        v[i] = v_cluster[c];
+        *vi = v_cluster[c];
     }
 }

@@ -37,13 +37,8 @@ use crate::physics::mode::{Guard, Moving};
 /// `z = [u, v, p, p']` as polynomials of degree `deg` in `s = τ / h`: the
 /// Taylor terms `(A h)^k z / k!`, whose u and v parts are the coefficients.
 /// Returns their spreads (`Poly::spread(1)`, summed as they come).
-fn taylor_uv(
-    z: [f64; 4],
-    h: f64,
-    [w2, cm]: [f64; 2],
-    deg: usize,
-    [u, v]: [&mut Poly; 2],
-) -> [f64; 2] {
+fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly; 2]) -> [f64; 2] {
+    let [u, v] = uv;
     // The forcing's part `[p, p']` is linear in time: after two terms its
     // entries are `f · 0.0 = +0.0` (`f > 0`), left out of the rest (the
     // same values: `0.0 - w2 u` is computed as before).
