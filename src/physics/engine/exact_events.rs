@@ -533,7 +533,8 @@ impl Simulator {
                 ends_only,
             )?;
         }
-        let mut peak_slip = self.peak_slip;
+        // (Copies, kept only if every peak is decided.)
+        let (mut peak_slip, mut e_friction) = (self.peak_slip, self.e_friction);
         let (mut du, mut v_end) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
         let mut upper_work = 0.0;
         for c in 1..d.n_clusters {
@@ -544,10 +545,12 @@ impl Simulator {
             upper_work += work;
         }
         (du[0], v_end[0]) = (u0 - u0_start, v0);
+        // Friction's work: the constant force times the slip.
         for m in &d.moving[..d.n_moving] {
             let (j, hi, lo) = (m.j, m.hi, m.lo);
             let slip0 = self.u[j] - self.u[j - 1];
             let slip1 = slip0 + du[hi] - du[lo];
+            e_friction[j] -= d.slip_force[j] * (du[hi] - du[lo]);
             // A slip whose guard (its rate, signed) was searched keeps its
             // direction over the stretch: it peaks at an end.
             let watched = d.changing_guards & !muted & (1 << j) != 0;
@@ -564,14 +567,11 @@ impl Simulator {
         }
 
         // Work: input `∫ (Fext - m ag) v = m (q0 Δu + p' (τ u(τ) - ∫u))`,
-        // viscous `c ∫ v²`, friction the constant force times the slip.
+        // viscous `c ∫ v²`.
         let int_u = flow.h * integral(&flow.u, s);
         let mass = d.mass[0];
         let input = mass * (flow.q0 * (u0 - u0_start) + flow.p1 * (tau * u0 - int_u));
         let viscous = self.sys.c * flow.h * integral_of_square(&flow.v, s);
-        for m in &d.moving[..d.n_moving] {
-            self.e_friction[m.j] -= d.slip_force[m.j] * (du[m.hi] - du[m.lo]);
-        }
         move_bodies(&mut self.u, &mut self.v, d, n, u0, &du, &v_end);
         self.e_input += input + upper_work;
         // A prescribed support's drift from the input frame: its work on
@@ -583,7 +583,7 @@ impl Simulator {
         self.e_viscous += viscous;
         self.peak_u0 = peak_u0;
         self.peak_a0 = peak_a0;
-        self.peak_slip = peak_slip;
+        (self.peak_slip, self.e_friction) = (peak_slip, e_friction);
         self.t += tau;
         self.stats.steps += 1;
         Ok(())
