@@ -499,8 +499,8 @@ impl Simulator {
         let n = self.sys.n;
         let d = &self.dynamics;
         let tau = if s >= 1.0 { flow.h } else { s * flow.h };
-        let (u0_start, u0) = (self.u[0], flow.u.eval(s));
-        let v0 = flow.v.eval(s);
+        let u0_start = self.u[0];
+        let [u0, v0, int_u] = values_and_integral(&flow.u, &flow.v, s);
         let [a0, a1] = flow.accel_linear;
         let accel_end = a0 + a1 * tau - flow.w2 * u0 - flow.cm * v0;
 
@@ -568,8 +568,8 @@ impl Simulator {
 
         // Work: input `∫ (Fext - m ag) v = m (q0 Δu + p' (τ u(τ) - ∫u))`,
         // viscous `c ∫ v²`.
-        let int_u = flow.h * integral(&flow.u, s);
         let mass = d.mass[0];
+        let int_u = flow.h * int_u;
         let input = mass * (flow.q0 * (u0 - u0_start) + flow.p1 * (tau * u0 - int_u));
         let viscous = self.sys.c * flow.h * integral_of_square(&flow.v, s);
         move_bodies(&mut self.u, &mut self.v, d, n, u0, &du, &v_end);

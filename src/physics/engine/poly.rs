@@ -352,14 +352,15 @@ pub(super) const INV: [f64; N_COEF + 1] = {
     inv
 };
 
-/// `∫_0^s p(σ) dσ`.
-pub(super) fn integral(p: &Poly, s: f64) -> f64 {
-    let mut total = 0.0;
-    // (Half-open: an inclusive range's iterator tests a flag per step.)
-    for k in (0..p.deg + 1).rev() {
-        total = total * s + p.c[k] * INV[k];
+/// `[u(s), v(s), ∫_0^s u(σ) dσ]` of two polynomials of one degree, in one
+/// pass (each Horner's sum as alone).
+pub(super) fn values_and_integral(u: &Poly, v: &Poly, s: f64) -> [f64; 3] {
+    let (mut yu, mut yv, mut total) = (0.0, 0.0, 0.0);
+    let terms = u.coefs().iter().zip(v.coefs()).zip(&INV).rev();
+    for ((uk, vk), inv) in terms {
+        (yu, yv, total) = (yu * s + uk, yv * s + vk, total * s + uk * inv);
     }
-    total * s
+    [yu, yv, total * s]
 }
 
 /// Gauss–Legendre rules on [0, 1] as their first halves (nodes, weights;
