@@ -469,7 +469,7 @@ impl Simulator {
                 // Only zeros before the earliest one found so far matter.
                 let end = earliest.map_or(1.0, |(s, _)| s);
                 let start = [0.0, g0.max(0.0), d0];
-                if let Some(s) = first_zero(poly, poly.bounds(), start, end, tol)? {
+                if let Some(s) = first_zero(poly, start, end, tol)? {
                     if earliest.is_none_or(|(e, _)| s < e) {
                         earliest = Some((s, j));
                     }

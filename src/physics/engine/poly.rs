@@ -37,19 +37,18 @@ impl Poly {
         Poly { c, deg }
     }
 
-    /// Bounds of `|p''|` and `|p'''|` over [0, 1] (triangle inequality; the
-    /// factor covers the rounding of the coefficients and of the sums).
-    pub(super) fn bounds(&self) -> [f64; 2] {
-        let (mut m2, mut m3) = (0.0, 0.0);
-        let mut kf = 2.0;
+    /// A bound of `|p''|` (`n` = 2) or `|p'''|` (3) over [0, 1] (triangle
+    /// inequality; the factor covers the rounding of the coefficients and
+    /// of the sums).
+    pub(super) fn bound(&self, n: usize) -> f64 {
+        let (mut m, mut kf) = (0.0, 2.0);
         let top = self.deg + 1;
         for c in &self.c[top.min(2)..top] {
             let term = kf * (kf - 1.0) * c.abs();
-            m2 += term;
-            m3 += term * (kf - 2.0);
+            m += if n == 2 { term } else { term * (kf - 2.0) };
             kf += 1.0;
         }
-        [m2 * (1.0 + 1e-12), m3 * (1.0 + 1e-12)]
+        m * (1.0 + 1e-12)
     }
 
     /// `Σ_(k >= 1) |c_k| s^k`: a bound of `|p(σ) - p(0)|` over `[0, s]`.
@@ -147,21 +146,20 @@ impl Poly {
 pub(super) struct Undecided;
 
 /// The first zero of `g` in `(a, e]`, where `g(a) = ga >= 0` with rate `da`
-/// (`ga = 0` only for a guard that grows from a zero), and `|g''|`, `|g'''|`
-/// are at most `m2`, `m3` over [0, 1] (`Poly::bounds`): `None` when `g > 0`
-/// over `(a, e]` is proved. `tol` is the width below which a stretch is
+/// (`ga = 0` only for a guard that grows from a zero): `None` when `g > 0`
+/// over `(a, e]` is proved (with [`Poly::bound`]s, each computed where it
+/// is first needed: most searches need one). `tol` is the width below which a stretch is
 /// not split further: a sign change there is the zero, and a dip below zero
 /// and back inside it is not seen (a graze).
 #[inline]
 pub(super) fn first_zero(
     g: &Poly,
-    [m2, m3]: [f64; 2],
     [mut a, mut ga, mut da]: [f64; 3],
     e: f64,
     tol: f64,
 ) -> Result<Option<f64>, Undecided> {
     let mut width = e - a;
-    let mut evaluations = 0;
+    let (mut evaluations, mut m2, mut m3) = (0, None, None);
     while a < e {
         evaluations += 1;
         if evaluations > EVALUATION_BUDGET {
@@ -171,6 +169,7 @@ pub(super) fn first_zero(
         let l = b - a;
         let (gb, db) = g.eval_d(b);
         if gb > 0.0 {
+            let m2 = *m2.get_or_insert_with(|| g.bound(2));
             if l <= tol || stays_positive([ga, da, gb, db], l, m2) {
                 (a, ga, da) = (b, gb, db);
                 width = 2.0 * l;
@@ -179,6 +178,7 @@ pub(super) fn first_zero(
         } else {
             // g' < 0 over the stretch (it stays within l²/8 sup|g'''| of its
             // linear interpolation): a single crossing.
+            let m3 = *m3.get_or_insert_with(|| g.bound(3));
             let falling = -da.max(db) > 0.125 * l * l * m3;
             if l <= tol || falling {
                 return Ok(Some(refine(g, [a, ga], [b, gb], [tol, 0.0])));
@@ -322,8 +322,7 @@ pub(super) fn raise_peak_inside(
         &g
     };
     let (g0, d0) = start.eval_d(0.0);
-    let mut zero = first_zero(start, start.bounds(), [0.0, g0.max(0.0), d0], e, tol)?;
-    let bounds = g.bounds(); // the same for either sign
+    let mut zero = first_zero(start, [0.0, g0.max(0.0), d0], e, tol)?;
     for _ in 0..MAX_CRITICAL_POINTS {
         let Some(r) = zero else {
             return Ok(());
@@ -335,7 +334,7 @@ pub(super) fn raise_peak_inside(
         // The next sign change of y', from the other side.
         g.negate();
         let (ga, da) = g.eval_d(r);
-        zero = first_zero(&g, bounds, [r, ga.max(0.0), da], e, tol)?;
+        zero = first_zero(&g, [r, ga.max(0.0), da], e, tol)?;
     }
     Err(Undecided)
 }
@@ -456,7 +455,7 @@ mod tests {
 
     fn first_zero_from_start(g: &Poly) -> Option<f64> {
         let (g0, d0) = g.eval_d(0.0);
-        first_zero(g, g.bounds(), [0.0, g0, d0], 1.0, 1e-13).unwrap()
+        first_zero(g, [0.0, g0, d0], 1.0, 1e-13).unwrap()
     }
 
     #[test]
@@ -518,7 +517,7 @@ mod tests {
         hover.c[0] += 1e-18;
         let (g0, d0) = hover.eval_d(0.0);
         assert_eq!(
-            first_zero(&hover, hover.bounds(), [0.0, g0, d0], 1.0, 1e-13),
+            first_zero(&hover, [0.0, g0, d0], 1.0, 1e-13),
             Err(Undecided)
         );
     }
