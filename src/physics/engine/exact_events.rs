@@ -36,8 +36,9 @@ use crate::physics::mode::{Guard, Moving};
 /// `u` and `v` of the structure's cluster over a stretch of length `h` from
 /// `z = [u, v, p, p']` as polynomials of degree `deg` in `s = τ / h`: the
 /// Taylor terms `(A h)^k z / k!`, whose u and v parts are the coefficients.
-/// Returns their spreads (`Poly::spread(1)`, summed as they come).
-fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly; 2]) -> [f64; 2] {
+/// Returns their spreads (`Poly::spread(1)`, summed as they come) and
+/// that of `v`'s terms past the second.
+fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly; 2]) -> [f64; 3] {
     let [u, v] = uv;
     // The forcing's part `[p, p']` is linear in time: after two terms its
     // entries are `f · 0.0 = +0.0` (`f > 0`), left out of the rest (the
@@ -48,11 +49,12 @@ fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly
     let p1 = f * p_rate;
     [y0, y1] = [f * y1, f * (p - w2 * y0 - cm * y1)];
     (u.c[1], v.c[1]) = (y0, y1);
-    let mut spreads = [y0.abs(), y1.abs()];
+    let heads = [y0.abs(), y1.abs()];
     let f = h * INV[1];
     [y0, y1] = [f * y1, f * (p1 - w2 * y0 - cm * y1)];
     (u.c[2], v.c[2]) = (y0, y1);
-    spreads = [spreads[0] + y0.abs(), spreads[1] + y1.abs()];
+    let heads = [heads[0] + y0.abs(), heads[1] + y1.abs()];
+    let mut tails = [0.0, 0.0];
     let terms = u.c[3..=deg]
         .iter_mut()
         .zip(&mut v.c[3..=deg])
@@ -61,10 +63,10 @@ fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly
         let f = h * inv;
         [y0, y1] = [f * y1, f * (0.0 - w2 * y0 - cm * y1)];
         (*uk, *vk) = (y0, y1);
-        spreads = [spreads[0] + y0.abs(), spreads[1] + y1.abs()];
+        tails = [tails[0] + y0.abs(), tails[1] + y1.abs()];
     }
     (u.deg, v.deg) = (deg, deg);
-    spreads
+    [heads[0] + tails[0], heads[1] + tails[1], tails[1]]
 }
 
 /// For the driver (`sweep.rs`), over one whole substep from `z` where its
@@ -112,6 +114,8 @@ struct Flow {
     /// over the stretch.
     u_spread: f64,
     v_spread: f64,
+    /// That of `v`'s terms past the second.
+    v_tail: f64,
     /// The absolute acceleration as `a0 + a1 τ - w2 u - cm v`, its start
     /// and a bound of how far it can move from it (from the spreads).
     accel_linear: [f64; 2],
@@ -144,7 +148,7 @@ impl Flow {
         let q0 = d.input_accel(ag0, fext0) - ag0;
         let p0 = d.load_accel0 + q0;
         let p1 = d.input_accel(exc.ag_rate, exc.fext_rate) - exc.ag_rate;
-        [self.u_spread, self.v_spread] = taylor_uv(
+        [self.u_spread, self.v_spread, self.v_tail] = taylor_uv(
             [sim.u[0], sim.v[0], p0, p1],
             h,
             [w2, cm],
@@ -256,7 +260,9 @@ impl Flow {
                     }
                     p.deg = 2;
                 }
-                *spread = p.spread(1.0);
+                // Its terms past the second are `v`'s, or none.
+                let tail = if lo == 0 { self.v_tail } else { 0.0 };
+                *spread = p.c[1].abs() + p.c[2].abs() + tail;
                 usize::from(p.c[0] <= *spread)
             }
             Guard::Stuck {
