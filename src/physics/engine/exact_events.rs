@@ -37,7 +37,8 @@ use crate::physics::mode::{Guard, Moving};
 /// `z = [u, v, p, p']` as polynomials of degree `deg` in `s = τ / h`: the
 /// Taylor terms `(A h)^k z / k!`, whose u and v parts are the coefficients.
 /// Returns their spreads (`Poly::spread(1)`, summed as they come) and
-/// that of `v`'s terms past the second.
+/// that of `v`'s terms past the second (inlined: dropped where unused).
+#[inline(always)]
 fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly; 2]) -> [f64; 3] {
     let [u, v] = uv;
     // The forcing's part `[p, p']` is linear in time: after two terms its
