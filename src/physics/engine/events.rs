@@ -317,6 +317,7 @@ impl DynamicsCache {
     }
 
     /// Sets `out` to the dynamics of `mode`, built if missing.
+    #[inline]
     pub(super) fn load(&mut self, sys: &System, mode: &Mode, out: &mut Dynamics) {
         let key = DynamicsCache::key(mode);
         let slot = DynamicsCache::slot(key);

@@ -385,6 +385,7 @@ const GAUSS_12: [[f64; 6]; 2] = [
 /// 6-point rule leaves those from degree 12 on, below 1e-18 of the first;
 /// else 12 points leave those from degree 24 on, below 1e-22 with
 /// `ρ <= 0.5 (1 + 2ζ)` (`exact_map::MAP_H_OMEGA`).
+#[inline]
 pub(super) fn integral_of_square(p: &Poly, s: f64) -> f64 {
     if p.deg <= 9 {
         gauss_square(p, s, GAUSS_6)
