@@ -235,10 +235,9 @@ impl Simulator {
     }
 
     /// Fires the located guard `j` whatever its sign after rounding, and
-    /// every other guard `searched` over the stretch and not `muted` that
-    /// has reached zero too (the others were proved positive over it);
-    /// counts the step's `events` and mutes every guard after
-    /// `MAX_EVENTS_PER_STEP`.
+    /// every other one `searched` (not proved positive over the stretch),
+    /// not `muted`, at zero too; counts the step's `events` and mutes every
+    /// guard after `MAX_EVENTS_PER_STEP`.
     pub(super) fn fire_located(
         &mut self,
         exc: &Excitation,
