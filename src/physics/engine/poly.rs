@@ -381,7 +381,7 @@ const GAUSS_12: [[f64; 6]; 2] = [
 /// `∫_0^s p(σ)² dσ` for a Taylor polynomial of the motion of degree `deg`
 /// from [`super::exact_map::degree`], by a Gauss rule (the evaluations run
 /// side by side). Its terms fall as `ρ^k / k!` (`ρ^deg / deg! < 1e-16`),
-/// those of the square as `(2ρ)^k / k!`: for `deg <= 9` (`ρ < 0.071`) the
+/// those of the square as `(2ρ)^k / k!`: for `deg <= 9` (`ρ < 0.07`) the
 /// 6-point rule leaves those from degree 12 on, below 1e-18 of the first;
 /// else 12 points leave those from degree 24 on, below 1e-22 with
 /// `ρ <= 0.5 (1 + 2ζ)` (`exact_map::MAP_H_OMEGA`).
