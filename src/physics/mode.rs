@@ -723,6 +723,15 @@ pub struct ResolveRequest {
     pub load0: f64,
 }
 
+impl ResolveRequest {
+    /// Whether `mode` keeps a stick of `must_break` (in `zero`): last under
+    /// rule 1 of [`resolve`], never a rival ([`Resolved::ambiguous`]).
+    pub fn keeps_breaking(&self, mode: &Mode) -> bool {
+        let breaking = self.zero & self.must_break;
+        (1..mode.n + 1).any(|j| breaking & (1 << j) != 0 && mode.is_stuck(j))
+    }
+}
+
 /// Outcome of a resolution.
 #[derive(Clone, Copy, Debug)]
 pub struct Resolved {
@@ -731,8 +740,10 @@ pub struct Resolved {
     /// False when no assignment satisfied the contact law within
     /// [`CONSISTENCY_TOL`] and the least violating one was taken.
     pub consistent: bool,
-    /// Whether the selection rule chose among several consistent
-    /// assignments (possible only with mus > muk at an interface in `zero`).
+    /// Whether the selection rule chose among several consistent assignments
+    /// (rivals: with mus > muk only), none keeping a stick of `must_break`
+    /// ([`ResolveRequest::keeps_breaking`]): the state the law has just left,
+    /// consistent or not by rounding, is no rival.
     pub ambiguous: bool,
     /// Assignments tried (the work of the resolution).
     pub tries: u32,
@@ -879,26 +890,13 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 }
 
 /// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
-/// [`only_consistent`] covers every rival (one slip: all but `mode` with it stuck, checked;
-/// a free interface in `zero` fails it), else [`Walk::second_consistent`]. Out of line:
-/// inlined, the walk moved the sweep's code (the bare structure 7% slower).
+/// [`only_consistent`] covers every rival (`mode`'s slips are those of `must_break`, whose
+/// sticking makes no rival; a free interface in `zero` fails it), else
+/// [`Walk::second_consistent`]. Out of line: inlined, the walk moved the sweep's code (the
+/// bare structure 7% slower).
 #[inline(never)]
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
-    let (zero, slips) = (req.zero, req.zero & req.must_break);
-    let proved = equal
-        || match slips.count_ones() {
-            0 => only_consistent(sys, mode, zero, req.load0, false),
-            1 => {
-                let mut stuck = *mode;
-                stuck.contact[slips.trailing_zeros() as usize] = Contact::Stuck;
-                if consistent(sys, &stuck, zero, req.load0) {
-                    return (true, 1);
-                }
-                only_consistent(sys, mode, zero, req.load0, false)
-                    && only_consistent(sys, &stuck, zero & !slips, req.load0, false)
-            }
-            _ => false,
-        };
+    let proved = equal || only_consistent(sys, mode, req.zero, req.load0, false);
     (!proved)
         .then(|| Walk::new(sys, req).second_consistent())
         .unwrap_or((false, 0))
@@ -936,8 +934,9 @@ fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking:
 }
 
 /// The state of a walk: the best consistent assignment so far and how many
-/// were found; `bound`: drop branches that cannot beat the best on the
-/// rule's first two criteria; `limit`: stop after so many.
+/// rivals ([`Resolved::ambiguous`]) were found; `bound`: drop branches that
+/// cannot beat the best on the rule's first two criteria; `limit`: stop
+/// after so many.
 struct Search {
     /// The assignment being built (every contact of the walk's branch).
     mode: Mode,
@@ -1068,7 +1067,7 @@ impl<'a> Walk<'a> {
             .all(|j| self.sys.mus[j] == self.sys.muk[j])
     }
 
-    /// Whether a second consistent assignment exists (ambiguity), and tries.
+    /// Whether a second rival exists ([`Resolved::ambiguous`]), and tries.
     fn second_consistent(&self) -> (bool, u32) {
         let all = self.search(false, 2);
         (all.count > 1, all.tries)
@@ -1138,7 +1137,8 @@ impl<'a> Walk<'a> {
         if j > n {
             search.tries += 1;
             if self.close(open, n + 1, &search.mode).is_some() {
-                search.count += 1;
+                // (`broken`: [`ResolveRequest::keeps_breaking`], no rival.)
+                search.count += u32::from(!broken);
                 let key = self.key(&search.mode);
                 if search.best.is_none_or(|(b, _)| key < b) {
                     search.best = Some((key, search.mode));
@@ -1298,9 +1298,10 @@ pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
 }
 
 /// Number of consistent assignments of the interfaces in `req.zero` (every
-/// stick / forward / backward combination), by enumeration: the oracle of
-/// the tests. Only mus > muk can make it exceed one, so the enumeration
-/// (3^k modes) is skipped otherwise.
+/// stick / forward / backward combination) that are rivals
+/// ([`Resolved::ambiguous`]), by enumeration: the oracle of the tests. Only
+/// mus > muk can make it exceed one, so the enumeration (3^k modes) is
+/// skipped otherwise.
 pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
     consistent_count_and_tries(sys, req).0
 }
@@ -1327,7 +1328,9 @@ pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u
                 [Contact::Stuck, Contact::SlipForward, Contact::SlipBackward][(rest % 3) as usize];
             rest /= 3;
         }
-        if violation(sys, &mode, req.zero, req.load0) <= CONSISTENCY_TOL {
+        if !req.keeps_breaking(&mode)
+            && violation(sys, &mode, req.zero, req.load0) <= CONSISTENCY_TOL
+        {
             count += 1;
         }
     }
