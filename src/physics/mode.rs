@@ -794,7 +794,7 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
                 ambiguous,
                 tries,
             };
-            return only_consistent(sys, &mode, zero, req.load0, true).then_some(res);
+            return only_consistent(sys, &mode, zero, req.load0, zero).then_some(res);
         }
         let (mut j, mut x) = (0, 1.0f64);
         let mut last = (0, 0.0);
@@ -820,11 +820,12 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
         all.tries += search.tries;
         return all;
     };
-    // Several consistent assignments (the rule decided): possible only
-    // with mus > muk; the bounded walk may have skipped the others.
-    let ambiguous = !walk.all_equal_friction()
+    // Several rivals (the rule decided): possible only with mus > muk; the
+    // bounded walk may have skipped the others.
+    let equal = walk.all_equal_friction();
+    let ambiguous = !equal
         && (search.count > 1 || {
-            let (second, tries) = walk.second_consistent();
+            let (second, tries) = ambiguity(equal, sys, req, &mode);
             search.tries += tries;
             second
         });
@@ -889,28 +890,47 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     None
 }
 
-/// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
-/// [`only_consistent`] covers every rival (`mode`'s slips are those of `must_break`, whose
-/// sticking makes no rival; a free interface in `zero` fails it), else
+/// The ambiguity of the chosen `mode` and its tries: none where mus = muk, where `mode` keeps
+/// a stick of `must_break` (a rival would rank first) or where [`only_consistent`] covers every
+/// rival (a slip of `must_break` sticking makes none; a free interface in `zero` fails it); a
+/// rival found where one stick slips the way its force drives it past `muk N`; else
 /// [`Walk::second_consistent`]. Out of line: inlined, the walk moved the sweep's code (the
 /// bare structure 7% slower).
 #[inline(never)]
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
-    let proved = equal || only_consistent(sys, mode, req.zero, req.load0, false);
-    (!proved)
-        .then(|| Walk::new(sys, req).second_consistent())
-        .unwrap_or((false, 0))
+    if equal || req.keeps_breaking(mode) {
+        return (false, 0);
+    }
+    let (zero, load0) = (req.zero & !free_mask(sys), req.load0);
+    if only_consistent(sys, mode, req.zero, load0, zero & !req.must_break) {
+        return (false, 0);
+    }
+    let (mut tries, mut last) = (0, (0, 0.0));
+    for j in (1..sys.n + 1).filter(|&j| zero & (1 << j) != 0 && mode.is_stuck(j)) {
+        let force = stuck_force_up(sys, mode, load0, j, &mut last);
+        if force.abs() > sys.muk[j] * sys.normal[j] {
+            let mut rival = *mode;
+            rival.contact[j] =
+                [Contact::SlipForward, Contact::SlipBackward][usize::from(force > 0.0)];
+            tries += 1;
+            if consistent(sys, &rival, zero, load0) {
+                return (true, tries);
+            }
+        }
+    }
+    let (second, walk_tries) = Walk::new(sys, req).second_consistent();
+    (second, tries + walk_tries)
 }
 
 /// Whether no consistent assignment differs from `mode` at `ifaces` by
-/// slipped sticks, reversed slips (or, `sticking`, stuck slips), `mode`
+/// slipped sticks, reversed slips or stuck slips of `sticking`, `mode`
 /// consistent there. A rival's force changes `g` move the bodies by `da`:
 /// `Q = Σ m da² = Σ g_i dr_i` (Newton, by parts), each term at most `4 muk N
 /// eps g`, or `(mus N (1 + eps) - muk N) r` where a slip sticks (`r > 0` its
 /// relative acceleration); a difference needs `Q M` (`M` the blocks' mass) at
 /// least `(muk N - |F|)²` (a stick slipping), `(2 muk N)²` (a slip reversing)
 /// or `M r² min(m_i, m_(i-1)) / 2` (a slip sticking): each twice the bound.
-fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking: bool) -> bool {
+fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking: u32) -> bool {
     let (eps, mass) = (CONSISTENCY_TOL, sys.mass_up[1][sys.n + 1]);
     let (mut bound, mut need) = (0.0, f64::INFINITY);
     let mut last = (0, 0.0);
@@ -920,7 +940,7 @@ fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking:
         need = need.min(if mode.is_stuck(j) {
             let margin = (k - stuck_force_up(sys, mode, load0, j, &mut last).abs()).max(0.0);
             margin * margin
-        } else if sticking {
+        } else if sticking & (1 << j) != 0 {
             // Its relative acceleration: only the two clusters it separates.
             let rel = body_accel(sys, mode, load0, j).1 - body_accel(sys, mode, load0, j - 1).1;
             let r = (mode.contact[j].slip_sign() * rel).max(0.0);
