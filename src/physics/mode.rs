@@ -767,10 +767,10 @@ pub struct Resolved {
 /// slip only on the two clusters it separates. Where no assignment is
 /// consistent, the enumeration of all 3^k picks the least violating one.
 pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
-    if let Some(res) = resolve_most_stuck(sys, req) {
-        return res;
-    }
-    resolve_cascade(sys, req).unwrap_or_else(|| resolve_by_walk(sys, req))
+    resolve_most_stuck(sys, req, false)
+        .or_else(|| resolve_cascade(sys, req))
+        .or_else(|| resolve_most_stuck(sys, req, true))
+        .unwrap_or_else(|| resolve_by_walk(sys, req))
 }
 
 /// [`resolve`] for a cascade with mus = muk: from all of `zero` stuck (as
@@ -838,56 +838,67 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
 }
 
 /// Most switches, decided without the walk: every interface of `zero`
-/// stuck but those of `must_break`, which slip in every combination of
-/// directions in the rule's order (at most two such interfaces). The first
-/// of these that is consistent is the walk's: no other assignment keeps as
-/// many interfaces stuck without one of `must_break` (rule 1 and 2), the
-/// stuck set, hence the kept count (rule 3) and the stuck bits, is the same
-/// for all of them, and they come in the order of their slip directions'
-/// bits (the rest of rule 4), and its [`ambiguity`]. `None`: none is
+/// stuck but those of `must_break` (at most two), with `more` but one more
+/// of `zero` too, tried in the rule's order. No other assignment without a
+/// stick of `must_break` keeps more interfaces stuck (rules 1 and 2; with
+/// `more`, the set without it was tried and failed): the first consistent
+/// one is the walk's. With `more`, the extra slip goes through those not
+/// stuck before first (rule 3), each from the top (the stuck bits of rule
+/// 4); then, for each set of slips, their directions come in the order of
+/// their bits (the rest of rule 4). With its [`ambiguity`]. `None`: none is
 /// consistent, or the case is not covered (the walk decides).
-fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
+fn resolve_most_stuck(sys: &System, req: &ResolveRequest, more: bool) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
     let breaking = zero & req.must_break;
     if breaking.count_ones() > 2 {
         return None;
     }
-    let mut mode = req.mode;
-    let mut slips = [0usize; 2];
-    let mut n_slips = 0;
+    let mut stuck = req.mode;
     // One pass over the interfaces of `zero`, from the bottom.
     let (mut rest, mut equal) = (zero, true);
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
         equal &= sys.mus[j] == sys.muk[j];
-        if breaking & (1 << j) != 0 {
-            slips[n_slips] = j;
-            n_slips += 1;
-        } else {
-            mode.contact[j] = Contact::Stuck;
+        stuck.contact[j] = Contact::Stuck;
+    }
+    let others = zero & !breaking;
+    let mut extras = [others & !req.was_stuck, others & req.was_stuck];
+    let mut tries = 0;
+    loop {
+        let mut slips = breaking;
+        if more {
+            let set = extras.iter_mut().find(|set| **set != 0)?;
+            let top = 1 << (31 - set.leading_zeros());
+            (*set, slips) = (*set & !top, slips | top);
+        }
+        let (mut list, mut n_slips) = ([0usize; 3], 0);
+        while slips != 0 {
+            list[n_slips] = slips.trailing_zeros() as usize;
+            (slips, n_slips) = (slips & (slips - 1), n_slips + 1);
+        }
+        // Slip directions as the rule's bits (backward = 1, from the bottom).
+        for code in 0u32..1 << n_slips {
+            let mut mode = stuck;
+            for (s, &j) in list[..n_slips].iter().enumerate() {
+                mode.contact[j] =
+                    [Contact::SlipForward, Contact::SlipBackward][(code >> s & 1) as usize];
+            }
+            tries += 1;
+            if consistent(sys, &mode, zero, req.load0) {
+                let (ambiguous, more_tries) = ambiguity(equal, sys, req, &mode);
+                return Some(Resolved {
+                    mode,
+                    consistent: true,
+                    ambiguous,
+                    tries: tries + more_tries,
+                });
+            }
+        }
+        if !more {
+            return None;
         }
     }
-    // Slip directions as the rule's bits (backward = 1, from the bottom).
-    for code in 0u32..1 << n_slips {
-        for (s, &j) in slips[..n_slips].iter().enumerate() {
-            mode.contact[j] = if code & (1 << s) != 0 {
-                Contact::SlipBackward
-            } else {
-                Contact::SlipForward
-            };
-        }
-        if consistent(sys, &mode, zero, req.load0) {
-            let (ambiguous, tries) = ambiguity(equal, sys, req, &mode);
-            return Some(Resolved {
-                mode,
-                consistent: true,
-                ambiguous,
-                tries: code + 1 + tries,
-            });
-        }
-    }
-    None
 }
 
 /// The ambiguity of the chosen `mode` and its tries: none where mus = muk, where `mode` keeps
