@@ -593,13 +593,7 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
 
 /// Interfaces (bit j) that carry no friction.
 fn free_mask(sys: &System) -> u32 {
-    let mut m = 0;
-    for j in 1..sys.n + 1 {
-        if sys.is_free(j) {
-            m |= 1 << j;
-        }
-    }
-    m
+    (1..sys.n + 1).fold(0, |m, j| m | u32::from(sys.is_free(j)) << j)
 }
 
 /// The contact law on one cluster of `mode`, bodies `bottom..end` (the
@@ -837,16 +831,13 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     }
 }
 
-/// Most switches, decided without the walk: every interface of `zero`
-/// stuck but those of `must_break` (at most two), with `more` but one more
-/// of `zero` too, tried in the rule's order. No other assignment without a
-/// stick of `must_break` keeps more interfaces stuck (rules 1 and 2; with
-/// `more`, the set without it was tried and failed): the first consistent
-/// one is the walk's. With `more`, the extra slip goes through those not
-/// stuck before first (rule 3), each from the top (the stuck bits of rule
-/// 4); then, for each set of slips, their directions come in the order of
-/// their bits (the rest of rule 4). With its [`ambiguity`]. `None`: none is
-/// consistent, or the case is not covered (the walk decides).
+/// Most switches, decided without the walk: every interface of `zero` stuck
+/// but those of `must_break` (at most two) and, with `more` (that set failed),
+/// one more, in the rule's order: no assignment without a stick of
+/// `must_break` keeps more stuck (rules 1, 2), the extra slip goes through
+/// those not stuck before first (rule 3), each from the top (rule 4's stuck
+/// bits), the directions by their bits (rule 4's rest). The first consistent
+/// is the walk's, with its [`ambiguity`]; `None`: none, or not covered.
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest, more: bool) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
     let breaking = zero & req.must_break;
@@ -872,17 +863,14 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, more: bool) -> Option<
             let top = 1 << (31 - set.leading_zeros());
             (*set, slips) = (*set & !top, slips | top);
         }
-        let (mut list, mut n_slips) = ([0usize; 3], 0);
-        while slips != 0 {
-            list[n_slips] = slips.trailing_zeros() as usize;
-            (slips, n_slips) = (slips & (slips - 1), n_slips + 1);
-        }
         // Slip directions as the rule's bits (backward = 1, from the bottom).
-        for code in 0u32..1 << n_slips {
-            let mut mode = stuck;
-            for (s, &j) in list[..n_slips].iter().enumerate() {
+        for code in 0u32..1 << slips.count_ones() {
+            let (mut mode, mut rest, mut bits) = (stuck, slips, code);
+            while rest != 0 {
+                let j = rest.trailing_zeros() as usize;
                 mode.contact[j] =
-                    [Contact::SlipForward, Contact::SlipBackward][(code >> s & 1) as usize];
+                    [Contact::SlipForward, Contact::SlipBackward][(bits & 1) as usize];
+                (rest, bits) = (rest & (rest - 1), bits >> 1);
             }
             tries += 1;
             if consistent(sys, &mode, zero, req.load0) {
@@ -904,8 +892,8 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, more: bool) -> Option<
 /// The ambiguity of the chosen `mode` and its tries: none where mus = muk, where `mode` keeps
 /// a stick of `must_break` (a rival would rank first) or where [`only_consistent`] covers every
 /// rival (a slip of `must_break` sticking makes none; a free interface in `zero` fails it); a
-/// rival found where one stick slips the way its force drives it past `muk N`; else
-/// [`Walk::second_consistent`]. Out of line: inlined, the walk moved the sweep's code (the
+/// rival found where one stick slips the way its force drives it past `muk N`; else the
+/// unbounded walk. Out of line: inlined, the walk moved the sweep's code (the
 /// bare structure 7% slower).
 #[inline(never)]
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
@@ -929,8 +917,9 @@ fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (b
             }
         }
     }
-    let (second, walk_tries) = Walk::new(sys, req).second_consistent();
-    (second, tries + walk_tries)
+    // The unbounded walk, to a second rival.
+    let all = Walk::new(sys, req).search(false, 2);
+    (all.count > 1, tries + all.tries)
 }
 
 /// Whether no consistent assignment differs from `mode` at `ifaces` by
@@ -1096,12 +1085,6 @@ impl<'a> Walk<'a> {
         (1..self.sys.n + 1)
             .filter(|&j| self.index[j] != usize::MAX)
             .all(|j| self.sys.mus[j] == self.sys.muk[j])
-    }
-
-    /// Whether a second rival exists ([`Resolved::ambiguous`]), and tries.
-    fn second_consistent(&self) -> (bool, u32) {
-        let all = self.search(false, 2);
-        (all.count > 1, all.tries)
     }
 
     /// Walks the assignments: `bound`, and at most `limit` consistent ones.
