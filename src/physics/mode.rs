@@ -838,6 +838,7 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
 /// those not stuck before first (rule 3), each from the top (rule 4's stuck
 /// bits), the directions by their bits (rule 4's rest). The first consistent
 /// is the walk's, with its [`ambiguity`]; `None`: none, or not covered.
+#[inline(always)]
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest, more: bool) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
     let breaking = zero & req.must_break;
