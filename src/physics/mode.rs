@@ -591,6 +591,12 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     true
 }
 
+/// Whether mus = muk at every interface of `zero` with friction: then one
+/// assignment at most is consistent, and none is ambiguous.
+fn equal_friction(sys: &System, zero: u32) -> bool {
+    (1..sys.n + 1).all(|j| zero & (1 << j) == 0 || sys.mus[j] == sys.muk[j] || sys.is_free(j))
+}
+
 /// Interfaces (bit j) that carry no friction.
 fn free_mask(sys: &System) -> u32 {
     (1..sys.n + 1).fold(0, |m, j| m | u32::from(sys.is_free(j)) << j)
@@ -814,20 +820,18 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
         all.tries += search.tries;
         return all;
     };
-    // Several rivals (the rule decided): possible only with mus > muk; the
-    // bounded walk may have skipped the others.
-    let equal = walk.all_equal_friction();
-    let ambiguous = !equal
-        && (search.count > 1 || {
-            let (second, tries) = ambiguity(equal, sys, req, &mode);
-            search.tries += tries;
-            second
-        });
+    // Several rivals (the rule decided); the bounded walk may have skipped
+    // the others.
+    let equal = equal_friction(sys, req.zero);
+    let (ambiguous, tries) = match search.count {
+        0 | 1 => ambiguity(equal, sys, req, &mode),
+        _ => (!equal, 0),
+    };
     Resolved {
         mode,
         consistent: true,
         ambiguous,
-        tries: search.tries,
+        tries: search.tries + tries,
     }
 }
 
@@ -851,7 +855,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, more: bool) -> Option<
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        equal &= sys.mus[j] == sys.muk[j];
+        equal &= sys.mus[j] == sys.muk[j]; // (equal_friction, in the pass)
         stuck.contact[j] = Contact::Stuck;
     }
     let others = zero & !breaking;
@@ -1080,12 +1084,6 @@ impl<'a> Walk<'a> {
             n_options,
             zero_ifaces,
         }
-    }
-
-    fn all_equal_friction(&self) -> bool {
-        (1..self.sys.n + 1)
-            .filter(|&j| self.index[j] != usize::MAX)
-            .all(|j| self.sys.mus[j] == self.sys.muk[j])
     }
 
     /// Walks the assignments: `bound`, and at most `limit` consistent ones.
@@ -1330,7 +1328,7 @@ pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u
         k += 1;
     }
     let zero = &list[..k];
-    if zero.iter().all(|&j| sys.mus[j] == sys.muk[j]) {
+    if equal_friction(sys, req.zero) {
         return (1, 0);
     }
     let mut count = 0;
