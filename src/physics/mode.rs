@@ -671,21 +671,10 @@ fn cluster_law(
 
 /// The force of stuck interface `j` of `mode` (body j-1 on body j) under
 /// the structure load `load0`, as [`cluster_law`] and [`Dynamics::force`] have
-/// it (inlined: the proofs take it at every stick).
-#[inline(always)]
-fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
-    stuck_force_up(sys, mode, load0, j, &mut (0, 0.0))
-}
-
-/// [`stuck_force`] along a walk up the stack of one mode: `last`, the
-/// interface above the last cluster met and its acceleration, spares taking
-/// a cluster's acceleration again for each of its interfaces.
+/// it, along a walk up the stack of one mode ([`body_accel`]).
 #[inline(always)]
 fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut (usize, f64)) -> f64 {
-    if j >= last.0 {
-        *last = body_accel(sys, mode, load0, j);
-    }
-    let (end, accel) = *last;
+    let (end, accel) = body_accel(sys, mode, load0, j, last);
     let f_top = if end <= sys.n {
         -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
     } else {
@@ -694,17 +683,27 @@ fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut (u
     sys.mass_down[j][end] * accel + f_top
 }
 
-/// The absolute acceleration of the cluster of `mode` that holds body `i`,
-/// by [`cluster_law`] (as [`Dynamics::accel`] has it), after the interface
-/// above that cluster.
+/// The interface above the cluster of `mode` that holds body `i` and the
+/// cluster's absolute acceleration by [`cluster_law`] (as [`Dynamics::accel`]
+/// has it), along a walk up the stack (`i` never decreasing): `last`, the
+/// cluster met last, is taken again only past its top.
 #[inline(always)]
-fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize) -> (usize, f64) {
-    let bottom = (1..i + 1).rev().find(|&k| !mode.is_stuck(k)).unwrap_or(0);
-    let end = (i + 1..sys.n + 1)
-        .find(|&k| !mode.is_stuck(k))
-        .unwrap_or(sys.n + 1);
-    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
-    (end, accel)
+fn body_accel(
+    sys: &System,
+    mode: &Mode,
+    load0: f64,
+    i: usize,
+    last: &mut (usize, f64),
+) -> (usize, f64) {
+    if i >= last.0 {
+        let bottom = (1..i + 1).rev().find(|&k| !mode.is_stuck(k)).unwrap_or(0);
+        let end = (i + 1..sys.n + 1)
+            .find(|&k| !mode.is_stuck(k))
+            .unwrap_or(sys.n + 1);
+        let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
+        *last = (end, accel);
+    }
+    *last
 }
 
 /// What the resolution is asked to decide.
@@ -947,7 +946,8 @@ fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking:
             margin * margin
         } else if sticking & (1 << j) != 0 {
             // Its relative acceleration: only the two clusters it separates.
-            let rel = body_accel(sys, mode, load0, j).1 - body_accel(sys, mode, load0, j - 1).1;
+            let below = body_accel(sys, mode, load0, j - 1, &mut last).1;
+            let rel = body_accel(sys, mode, load0, j, &mut last).1 - below;
             let r = (mode.contact[j].slip_sign() * rel).max(0.0);
             bound += (sys.mus[j] * sys.normal[j] * (1.0 + eps) - k) * r;
             (4.0 * k * k).min(0.5 * sys.mass[j].min(sys.mass[j - 1]) * mass * r * r)
@@ -1065,7 +1065,7 @@ impl<'a> Walk<'a> {
                 continue;
             }
             let mode = if breaks { &req.mode } else { &all_stuck };
-            let force = stuck_force(sys, mode, req.load0, j);
+            let force = stuck_force_up(sys, mode, req.load0, j, &mut (0, 0.0));
             let slips = breaks || force.abs() > sys.mus[j] * sys.normal[j];
             options[j] = match (slips, force > 0.0) {
                 (true, true) => [Back, Fwd, Stuck],
