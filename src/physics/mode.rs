@@ -19,6 +19,7 @@
 
 use crate::physics::params::MAX_BODIES;
 use crate::physics::system::System;
+use std::ops::Range;
 
 /// State of one interface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -766,9 +767,9 @@ pub struct Resolved {
 /// slip only on the two clusters it separates. Where no assignment is
 /// consistent, the enumeration of all 3^k picks the least violating one.
 pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
-    resolve_most_stuck(sys, req, false)
+    resolve_most_stuck(sys, req, 0..1)
         .or_else(|| resolve_cascade(sys, req))
-        .or_else(|| resolve_most_stuck(sys, req, true))
+        .or_else(|| resolve_most_stuck(sys, req, 1..3))
         .unwrap_or_else(|| resolve_by_walk(sys, req))
 }
 
@@ -835,14 +836,15 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
 }
 
 /// Most switches, decided without the walk: every interface of `zero` stuck
-/// but those of `must_break` (at most two) and, with `more` (that set failed),
-/// one more, in the rule's order: no assignment without a stick of
-/// `must_break` keeps more stuck (rules 1, 2), the extra slip goes through
-/// those not stuck before first (rule 3), each from the top (rule 4's stuck
-/// bits), the directions by their bits (rule 4's rest). The first consistent
-/// is the walk's, with its [`ambiguity`]; `None`: none, or not covered.
+/// but those of `must_break` (at most two) and `more` others, for each `more`
+/// of `levels` (the levels below failed), in the rule's order: no assignment
+/// without a stick of `must_break` keeps more stuck (rules 1, 2), the extra
+/// slips go through those not stuck before first (rule 3), the highest first
+/// (rule 4's stuck bits), the directions by their bits (rule 4's rest). The
+/// first consistent is the walk's, with its [`ambiguity`]; `None`: none, or
+/// not covered.
 #[inline(always)]
-fn resolve_most_stuck(sys: &System, req: &ResolveRequest, more: bool) -> Option<Resolved> {
+fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
     let breaking = zero & req.must_break;
     if breaking.count_ones() > 2 {
@@ -858,39 +860,51 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, more: bool) -> Option<
         stuck.contact[j] = Contact::Stuck;
     }
     let others = zero & !breaking;
-    let mut extras = [others & !req.was_stuck, others & req.was_stuck];
+    // The interfaces of `set` from the top (bits), after a 0 if `none`.
+    let top = |set: u32| (set != 0).then(|| 1u32 << (31 - set.leading_zeros()));
+    let picks = move |set: u32, none: bool| {
+        let down = std::iter::successors(top(set), move |&b| top(set & (b - 1)));
+        none.then_some(0).into_iter().chain(down)
+    };
     let mut tries = 0;
-    loop {
-        let mut slips = breaking;
-        if more {
-            let set = extras.iter_mut().find(|set| **set != 0)?;
-            let top = 1 << (31 - set.leading_zeros());
-            (*set, slips) = (*set & !top, slips | top);
-        }
-        // Slip directions as the rule's bits (backward = 1, from the bottom).
-        for code in 0u32..1 << slips.count_ones() {
-            let (mut mode, mut rest, mut bits) = (stuck, slips, code);
-            while rest != 0 {
-                let j = rest.trailing_zeros() as usize;
-                mode.contact[j] =
-                    [Contact::SlipForward, Contact::SlipBackward][(bits & 1) as usize];
-                (rest, bits) = (rest & (rest - 1), bits >> 1);
+    for more in levels {
+        for lost in 0..more + 1 {
+            for hi in picks(if more > 0 { others } else { 0 }, more == 0) {
+                let below = if more == 2 {
+                    others & hi.wrapping_sub(1)
+                } else {
+                    0
+                };
+                for lo in picks(below, more < 2) {
+                    if ((hi | lo) & req.was_stuck).count_ones() != lost {
+                        continue;
+                    }
+                    let slips = breaking | hi | lo;
+                    // Slip directions as the rule's bits (backward = 1, from the bottom).
+                    for code in 0u32..1 << slips.count_ones() {
+                        let (mut mode, mut rest, mut bits) = (stuck, slips, code);
+                        while rest != 0 {
+                            let j = rest.trailing_zeros() as usize;
+                            mode.contact[j] =
+                                [Contact::SlipForward, Contact::SlipBackward][(bits & 1) as usize];
+                            (rest, bits) = (rest & (rest - 1), bits >> 1);
+                        }
+                        tries += 1;
+                        if consistent(sys, &mode, zero, req.load0) {
+                            let (ambiguous, more_tries) = ambiguity(equal, sys, req, &mode);
+                            return Some(Resolved {
+                                mode,
+                                consistent: true,
+                                ambiguous,
+                                tries: tries + more_tries,
+                            });
+                        }
+                    }
+                }
             }
-            tries += 1;
-            if consistent(sys, &mode, zero, req.load0) {
-                let (ambiguous, more_tries) = ambiguity(equal, sys, req, &mode);
-                return Some(Resolved {
-                    mode,
-                    consistent: true,
-                    ambiguous,
-                    tries: tries + more_tries,
-                });
-            }
-        }
-        if !more {
-            return None;
         }
     }
+    None
 }
 
 /// The ambiguity of the chosen `mode` and its tries: none where mus = muk, where `mode` keeps
