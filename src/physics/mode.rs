@@ -674,7 +674,7 @@ fn cluster_law(
 /// the structure load `load0`, as [`cluster_law`] and [`Dynamics::force`] have
 /// it, along a walk up the stack of one mode ([`body_accel`]).
 #[inline(always)]
-fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut (usize, f64)) -> f64 {
+fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut Met) -> f64 {
     let (end, accel) = body_accel(sys, mode, load0, j, last);
     let f_top = if end <= sys.n {
         -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
@@ -684,18 +684,16 @@ fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut (u
     sys.mass_down[j][end] * accel + f_top
 }
 
+/// A cluster met on a walk up the stack: the interface above it, its
+/// absolute acceleration.
+type Met = (usize, f64);
+
 /// The interface above the cluster of `mode` that holds body `i` and the
 /// cluster's absolute acceleration by [`cluster_law`] (as [`Dynamics::accel`]
 /// has it), along a walk up the stack (`i` never decreasing): `last`, the
 /// cluster met last, is taken again only past its top.
 #[inline(always)]
-fn body_accel(
-    sys: &System,
-    mode: &Mode,
-    load0: f64,
-    i: usize,
-    last: &mut (usize, f64),
-) -> (usize, f64) {
+fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize, last: &mut Met) -> Met {
     if i >= last.0 {
         let bottom = (1..i + 1).rev().find(|&k| !mode.is_stuck(k)).unwrap_or(0);
         let end = (i + 1..sys.n + 1)
@@ -860,22 +858,18 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
         stuck.contact[j] = Contact::Stuck;
     }
     let others = zero & !breaking;
-    // The interfaces of `set` from the top (bits), after a 0 if `none`.
+    // The interfaces of `set` from the top (bits), or a 0 alone if `none`.
     let top = |set: u32| (set != 0).then(|| 1u32 << (31 - set.leading_zeros()));
     let picks = move |set: u32, none: bool| {
+        let set = if none { 0 } else { set };
         let down = std::iter::successors(top(set), move |&b| top(set & (b - 1)));
         none.then_some(0).into_iter().chain(down)
     };
     let mut tries = 0;
     for more in levels {
         for lost in 0..more + 1 {
-            for hi in picks(if more > 0 { others } else { 0 }, more == 0) {
-                let below = if more == 2 {
-                    others & hi.wrapping_sub(1)
-                } else {
-                    0
-                };
-                for lo in picks(below, more < 2) {
+            for hi in picks(others, more == 0) {
+                for lo in picks(others & hi.wrapping_sub(1), more < 2) {
                     if ((hi | lo) & req.was_stuck).count_ones() != lost {
                         continue;
                     }
@@ -910,9 +904,8 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
 /// The ambiguity of the chosen `mode` and its tries: none where mus = muk, where `mode` keeps
 /// a stick of `must_break` (a rival would rank first) or where [`only_consistent`] covers every
 /// rival (a slip of `must_break` sticking makes none; a free interface in `zero` fails it); a
-/// rival found where one stick slips the way its force drives it past `muk N`; else the
-/// unbounded walk. Out of line: inlined, the walk moved the sweep's code (the
-/// bare structure 7% slower).
+/// rival where one stick slips the way its force drives it past `muk N`; else the unbounded
+/// walk. Out of line: inlined, the walk moved the sweep's code (the bare structure 7% slower).
 #[inline(never)]
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
     if equal || req.keeps_breaking(mode) {
@@ -1324,11 +1317,9 @@ pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
     }
 }
 
-/// Number of consistent assignments of the interfaces in `req.zero` (every
-/// stick / forward / backward combination) that are rivals
-/// ([`Resolved::ambiguous`]), by enumeration: the oracle of the tests. Only
-/// mus > muk can make it exceed one, so the enumeration (3^k modes) is
-/// skipped otherwise.
+/// Number of rivals ([`Resolved::ambiguous`]) among the assignments of the
+/// interfaces in `req.zero`, by enumeration: the oracle of the tests. Only
+/// mus > muk can make it exceed one: the 3^k modes are skipped otherwise.
 pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
     consistent_count_and_tries(sys, req).0
 }
@@ -1355,11 +1346,8 @@ pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u
                 [Contact::Stuck, Contact::SlipForward, Contact::SlipBackward][(rest % 3) as usize];
             rest /= 3;
         }
-        if !req.keeps_breaking(&mode)
-            && violation(sys, &mode, req.zero, req.load0) <= CONSISTENCY_TOL
-        {
-            count += 1;
-        }
+        let v = violation(sys, &mode, req.zero, req.load0);
+        count += u32::from(v <= CONSISTENCY_TOL && !req.keeps_breaking(&mode));
     }
     (count, tries)
 }
