@@ -5,7 +5,7 @@
 
 mod common;
 use common::Rng;
-use stacked_live_load::physics::mode::{self, Contact, Dynamics, Mode, ResolveRequest};
+use stacked_live_load::physics::mode::{self, Contact, Dynamics, Guard, Mode, ResolveRequest};
 use stacked_live_load::physics::system::System;
 use stacked_live_load::Params;
 
@@ -423,4 +423,46 @@ fn the_ambiguity_count_does_not_flip_with_rounding() {
     }
     assert!(flips.is_empty(), "{flips:#?}");
     assert!(ambiguous > 0, "the count must be exercised");
+}
+
+// (Moved from src/physics/mode.rs: they use its public items only.)
+
+#[test]
+fn clusters_follow_the_stuck_interfaces() {
+    let mut p = Params::default();
+    p.n_blocks = 3;
+    let sys = System::new(&p).unwrap();
+    let mut mode = Mode::all_stuck(&sys);
+    mode.contact[2] = Contact::SlipForward;
+    let d = Dynamics::new(&sys, &mode);
+    assert_eq!(d.n_clusters, 2);
+    assert_eq!(d.cluster_of[..4], [0, 0, 1, 1]);
+    // Cluster 1 (blocks 2, 3) is pushed back by friction muk2 N2.
+    let expected = -sys.muk[2] * sys.normal[2];
+    assert_eq!(d.slip_load[1], expected);
+    assert_eq!(d.slip_load[0], -expected);
+}
+
+#[test]
+fn the_stick_band_is_inside_every_stick() {
+    // Expected: at the band's edges every stuck guard is still positive,
+    // and just beyond them (1e-9 relative) one is negative.
+    let sys = System::new(&Params::default()).unwrap();
+    let d = Dynamics::new(&sys, &Mode::all_stuck(&sys));
+    let guards = &d.guards[..d.n_guards];
+    assert_eq!(guards.len(), 2);
+    let fires = |a: f64| {
+        guards.iter().any(|g| match *g {
+            Guard::Stuck {
+                mass_above,
+                f_top,
+                cap,
+            } => cap - (mass_above * a + f_top).abs() < 0.0,
+            Guard::Slip { .. } => false,
+        })
+    };
+    let (lo, hi) = mode::safe_accel_band(guards);
+    assert!(lo < 0.0 && hi > 0.0);
+    assert!(!fires(lo) && !fires(hi));
+    assert!(fires(hi * (1.0 + 1e-9)) && fires(lo * (1.0 + 1e-9)));
 }
