@@ -812,7 +812,7 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 #[inline(never)]
 fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     let walk = Walk::new(sys, req);
-    let mut search = walk.search(true, u32::MAX);
+    let search = walk.search(true, u32::MAX);
     let Some((_, mode)) = search.best else {
         let mut all = resolve_by_enumeration(sys, req);
         all.tries += search.tries;
