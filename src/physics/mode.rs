@@ -19,6 +19,7 @@
 
 use crate::physics::params::MAX_BODIES;
 use crate::physics::system::System;
+use std::ops::Range;
 
 /// State of one interface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -591,15 +592,15 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     true
 }
 
+/// Whether mus = muk at every interface of `zero` with friction: then one
+/// assignment at most is consistent, and none is ambiguous.
+fn equal_friction(sys: &System, zero: u32) -> bool {
+    (1..sys.n + 1).all(|j| zero & (1 << j) == 0 || sys.mus[j] == sys.muk[j] || sys.is_free(j))
+}
+
 /// Interfaces (bit j) that carry no friction.
 fn free_mask(sys: &System) -> u32 {
-    let mut m = 0;
-    for j in 1..sys.n + 1 {
-        if sys.is_free(j) {
-            m |= 1 << j;
-        }
-    }
-    m
+    (1..sys.n + 1).fold(0, |m, j| m | u32::from(sys.is_free(j)) << j)
 }
 
 /// The contact law on one cluster of `mode`, bodies `bottom..end` (the
@@ -671,21 +672,10 @@ fn cluster_law(
 
 /// The force of stuck interface `j` of `mode` (body j-1 on body j) under
 /// the structure load `load0`, as [`cluster_law`] and [`Dynamics::force`] have
-/// it (inlined: the proofs take it at every stick).
+/// it, along a walk up the stack of one mode ([`body_accel`]).
 #[inline(always)]
-fn stuck_force(sys: &System, mode: &Mode, load0: f64, j: usize) -> f64 {
-    stuck_force_up(sys, mode, load0, j, &mut (0, 0.0))
-}
-
-/// [`stuck_force`] along a walk up the stack of one mode: `last`, the
-/// interface above the last cluster met and its acceleration, spares taking
-/// a cluster's acceleration again for each of its interfaces.
-#[inline(always)]
-fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut (usize, f64)) -> f64 {
-    if j >= last.0 {
-        *last = body_accel(sys, mode, load0, j);
-    }
-    let (end, accel) = *last;
+fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut Met) -> f64 {
+    let (end, accel) = body_accel(sys, mode, load0, j, last);
     let f_top = if end <= sys.n {
         -sys.muk[end] * sys.normal[end] * mode.contact[end].slip_sign()
     } else {
@@ -694,17 +684,25 @@ fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut (u
     sys.mass_down[j][end] * accel + f_top
 }
 
-/// The absolute acceleration of the cluster of `mode` that holds body `i`,
-/// by [`cluster_law`] (as [`Dynamics::accel`] has it), after the interface
-/// above that cluster.
+/// A cluster met on a walk up the stack: the interface above it, its
+/// absolute acceleration.
+type Met = (usize, f64);
+
+/// The interface above the cluster of `mode` that holds body `i` and the
+/// cluster's absolute acceleration by [`cluster_law`] (as [`Dynamics::accel`]
+/// has it), along a walk up the stack (`i` never decreasing): `last`, the
+/// cluster met last, is taken again only past its top.
 #[inline(always)]
-fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize) -> (usize, f64) {
-    let bottom = (1..i + 1).rev().find(|&k| !mode.is_stuck(k)).unwrap_or(0);
-    let end = (i + 1..sys.n + 1)
-        .find(|&k| !mode.is_stuck(k))
-        .unwrap_or(sys.n + 1);
-    let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
-    (end, accel)
+fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize, last: &mut Met) -> Met {
+    if i >= last.0 {
+        let bottom = (1..i + 1).rev().find(|&k| !mode.is_stuck(k)).unwrap_or(0);
+        let end = (i + 1..sys.n + 1)
+            .find(|&k| !mode.is_stuck(k))
+            .unwrap_or(sys.n + 1);
+        let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
+        *last = (end, accel);
+    }
+    *last
 }
 
 /// What the resolution is asked to decide.
@@ -723,6 +721,15 @@ pub struct ResolveRequest {
     pub load0: f64,
 }
 
+impl ResolveRequest {
+    /// Whether `mode` keeps a stick of `must_break` (in `zero`): last under
+    /// rule 1 of [`resolve`], never a rival ([`Resolved::ambiguous`]).
+    pub fn keeps_breaking(&self, mode: &Mode) -> bool {
+        let breaking = self.zero & self.must_break;
+        (1..mode.n + 1).any(|j| breaking & (1 << j) != 0 && mode.is_stuck(j))
+    }
+}
+
 /// Outcome of a resolution.
 #[derive(Clone, Copy, Debug)]
 pub struct Resolved {
@@ -731,8 +738,10 @@ pub struct Resolved {
     /// False when no assignment satisfied the contact law within
     /// [`CONSISTENCY_TOL`] and the least violating one was taken.
     pub consistent: bool,
-    /// Whether the selection rule chose among several consistent
-    /// assignments (possible only with mus > muk at an interface in `zero`).
+    /// Whether the selection rule chose among several consistent assignments
+    /// (rivals: with mus > muk only), none keeping a stick of `must_break`
+    /// ([`ResolveRequest::keeps_breaking`]): the state the law has just left,
+    /// consistent or not by rounding, is no rival.
     pub ambiguous: bool,
     /// Assignments tried (the work of the resolution).
     pub tries: u32,
@@ -756,10 +765,10 @@ pub struct Resolved {
 /// slip only on the two clusters it separates. Where no assignment is
 /// consistent, the enumeration of all 3^k picks the least violating one.
 pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
-    if let Some(res) = resolve_most_stuck(sys, req) {
-        return res;
-    }
-    resolve_cascade(sys, req).unwrap_or_else(|| resolve_by_walk(sys, req))
+    resolve_most_stuck(sys, req, 0..1)
+        .or_else(|| resolve_cascade(sys, req))
+        .or_else(|| resolve_most_stuck(sys, req, 1..3))
+        .unwrap_or_else(|| resolve_by_walk(sys, req))
 }
 
 /// [`resolve`] for a cascade with mus = muk: from all of `zero` stuck (as
@@ -783,7 +792,7 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
                 ambiguous,
                 tries,
             };
-            return only_consistent(sys, &mode, zero, req.load0, true).then_some(res);
+            return only_consistent(sys, &mode, zero, req.load0, zero).then_some(res);
         }
         let (mut j, mut x) = (0, 1.0f64);
         let mut last = (0, 0.0);
@@ -803,116 +812,136 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
 #[inline(never)]
 fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     let walk = Walk::new(sys, req);
-    let mut search = walk.search(true, u32::MAX);
+    let search = walk.search(true, u32::MAX);
     let Some((_, mode)) = search.best else {
         let mut all = resolve_by_enumeration(sys, req);
         all.tries += search.tries;
         return all;
     };
-    // Several consistent assignments (the rule decided): possible only
-    // with mus > muk; the bounded walk may have skipped the others.
-    let ambiguous = !walk.all_equal_friction()
-        && (search.count > 1 || {
-            let (second, tries) = walk.second_consistent();
-            search.tries += tries;
-            second
-        });
+    // Several rivals (the rule decided); the bounded walk may have skipped
+    // the others.
+    let equal = equal_friction(sys, req.zero);
+    let (ambiguous, tries) = match search.count {
+        0 | 1 => ambiguity(equal, sys, req, &mode),
+        _ => (!equal, 0),
+    };
     Resolved {
         mode,
         consistent: true,
         ambiguous,
-        tries: search.tries,
+        tries: search.tries + tries,
     }
 }
 
-/// Most switches, decided without the walk: every interface of `zero`
-/// stuck but those of `must_break`, which slip in every combination of
-/// directions in the rule's order (at most two such interfaces). The first
-/// of these that is consistent is the walk's: no other assignment keeps as
-/// many interfaces stuck without one of `must_break` (rule 1 and 2), the
-/// stuck set, hence the kept count (rule 3) and the stuck bits, is the same
-/// for all of them, and they come in the order of their slip directions'
-/// bits (the rest of rule 4), and its [`ambiguity`]. `None`: none is
-/// consistent, or the case is not covered (the walk decides).
-fn resolve_most_stuck(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
+/// Most switches, decided without the walk: every interface of `zero` stuck
+/// but those of `must_break` (at most two) and `more` others, for each `more`
+/// of `levels` (the levels below failed), in the rule's order: no assignment
+/// without a stick of `must_break` keeps more stuck (rules 1, 2), the extra
+/// slips go through those not stuck before first (rule 3), the highest first
+/// (rule 4's stuck bits), the directions by their bits (rule 4's rest). The
+/// first consistent is the walk's, with its [`ambiguity`]; `None`: none, or
+/// not covered.
+#[inline(always)]
+fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) -> Option<Resolved> {
     let zero = req.zero & !free_mask(sys);
     let breaking = zero & req.must_break;
     if breaking.count_ones() > 2 {
         return None;
     }
-    let mut mode = req.mode;
-    let mut slips = [0usize; 2];
-    let mut n_slips = 0;
+    let mut stuck = req.mode;
     // One pass over the interfaces of `zero`, from the bottom.
     let (mut rest, mut equal) = (zero, true);
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        equal &= sys.mus[j] == sys.muk[j];
-        if breaking & (1 << j) != 0 {
-            slips[n_slips] = j;
-            n_slips += 1;
-        } else {
-            mode.contact[j] = Contact::Stuck;
-        }
+        equal &= sys.mus[j] == sys.muk[j]; // (equal_friction, in the pass)
+        stuck.contact[j] = Contact::Stuck;
     }
-    // Slip directions as the rule's bits (backward = 1, from the bottom).
-    for code in 0u32..1 << n_slips {
-        for (s, &j) in slips[..n_slips].iter().enumerate() {
-            mode.contact[j] = if code & (1 << s) != 0 {
-                Contact::SlipBackward
-            } else {
-                Contact::SlipForward
-            };
-        }
-        if consistent(sys, &mode, zero, req.load0) {
-            let (ambiguous, tries) = ambiguity(equal, sys, req, &mode);
-            return Some(Resolved {
-                mode,
-                consistent: true,
-                ambiguous,
-                tries: code + 1 + tries,
-            });
+    let others = zero & !breaking;
+    // The interfaces of `set` from the top (bits), or a 0 alone if `none`.
+    let top = |set: u32| (set != 0).then(|| 1u32 << (31 - set.leading_zeros()));
+    let picks = move |set: u32, none: bool| {
+        let set = if none { 0 } else { set };
+        let down = std::iter::successors(top(set), move |&b| top(set & (b - 1)));
+        none.then_some(0).into_iter().chain(down)
+    };
+    let mut tries = 0;
+    for more in levels {
+        for lost in 0..more + 1 {
+            for hi in picks(others, more == 0) {
+                for lo in picks(others & hi.wrapping_sub(1), more < 2) {
+                    if ((hi | lo) & req.was_stuck).count_ones() != lost {
+                        continue;
+                    }
+                    let slips = breaking | hi | lo;
+                    // Slip directions as the rule's bits (backward = 1, from the bottom).
+                    for code in 0u32..1 << slips.count_ones() {
+                        let (mut mode, mut rest, mut bits) = (stuck, slips, code);
+                        while rest != 0 {
+                            let j = rest.trailing_zeros() as usize;
+                            mode.contact[j] =
+                                [Contact::SlipForward, Contact::SlipBackward][(bits & 1) as usize];
+                            (rest, bits) = (rest & (rest - 1), bits >> 1);
+                        }
+                        tries += 1;
+                        if consistent(sys, &mode, zero, req.load0) {
+                            let (ambiguous, more_tries) = ambiguity(equal, sys, req, &mode);
+                            return Some(Resolved {
+                                mode,
+                                consistent: true,
+                                ambiguous,
+                                tries: tries + more_tries,
+                            });
+                        }
+                    }
+                }
+            }
         }
     }
     None
 }
 
-/// The ambiguity of [`resolve_most_stuck`]'s `mode` and its tries: none where mus = muk or
-/// [`only_consistent`] covers every rival (one slip: all but `mode` with it stuck, checked;
-/// a free interface in `zero` fails it), else [`Walk::second_consistent`]. Out of line:
-/// inlined, the walk moved the sweep's code (the bare structure 7% slower).
+/// The ambiguity of the chosen `mode` and its tries: none where mus = muk, where `mode` keeps
+/// a stick of `must_break` (a rival would rank first) or where [`only_consistent`] covers every
+/// rival (a slip of `must_break` sticking makes none; a free interface in `zero` fails it); a
+/// rival where one stick slips the way its force drives it past `muk N`; else the unbounded
+/// walk. Out of line: inlined, the walk moved the sweep's code (the bare structure 7% slower).
 #[inline(never)]
 fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
-    let (zero, slips) = (req.zero, req.zero & req.must_break);
-    let proved = equal
-        || match slips.count_ones() {
-            0 => only_consistent(sys, mode, zero, req.load0, false),
-            1 => {
-                let mut stuck = *mode;
-                stuck.contact[slips.trailing_zeros() as usize] = Contact::Stuck;
-                if consistent(sys, &stuck, zero, req.load0) {
-                    return (true, 1);
-                }
-                only_consistent(sys, mode, zero, req.load0, false)
-                    && only_consistent(sys, &stuck, zero & !slips, req.load0, false)
+    if equal || req.keeps_breaking(mode) {
+        return (false, 0);
+    }
+    let (zero, load0) = (req.zero & !free_mask(sys), req.load0);
+    if only_consistent(sys, mode, req.zero, load0, zero & !req.must_break) {
+        return (false, 0);
+    }
+    let (mut tries, mut last) = (0, (0, 0.0));
+    for j in (1..sys.n + 1).filter(|&j| zero & (1 << j) != 0 && mode.is_stuck(j)) {
+        let force = stuck_force_up(sys, mode, load0, j, &mut last);
+        if force.abs() > sys.muk[j] * sys.normal[j] {
+            let mut rival = *mode;
+            rival.contact[j] =
+                [Contact::SlipForward, Contact::SlipBackward][usize::from(force > 0.0)];
+            tries += 1;
+            if consistent(sys, &rival, zero, load0) {
+                return (true, tries);
             }
-            _ => false,
-        };
-    (!proved)
-        .then(|| Walk::new(sys, req).second_consistent())
-        .unwrap_or((false, 0))
+        }
+    }
+    // The unbounded walk, to a second rival.
+    let all = Walk::new(sys, req).search(false, 2);
+    (all.count > 1, tries + all.tries)
 }
 
 /// Whether no consistent assignment differs from `mode` at `ifaces` by
-/// slipped sticks, reversed slips (or, `sticking`, stuck slips), `mode`
+/// slipped sticks, reversed slips or stuck slips of `sticking`, `mode`
 /// consistent there. A rival's force changes `g` move the bodies by `da`:
 /// `Q = Σ m da² = Σ g_i dr_i` (Newton, by parts), each term at most `4 muk N
 /// eps g`, or `(mus N (1 + eps) - muk N) r` where a slip sticks (`r > 0` its
 /// relative acceleration); a difference needs `Q M` (`M` the blocks' mass) at
 /// least `(muk N - |F|)²` (a stick slipping), `(2 muk N)²` (a slip reversing)
 /// or `M r² min(m_i, m_(i-1)) / 2` (a slip sticking): each twice the bound.
-fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking: bool) -> bool {
+fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking: u32) -> bool {
     let (eps, mass) = (CONSISTENCY_TOL, sys.mass_up[1][sys.n + 1]);
     let (mut bound, mut need) = (0.0, f64::INFINITY);
     let mut last = (0, 0.0);
@@ -922,9 +951,10 @@ fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking:
         need = need.min(if mode.is_stuck(j) {
             let margin = (k - stuck_force_up(sys, mode, load0, j, &mut last).abs()).max(0.0);
             margin * margin
-        } else if sticking {
+        } else if sticking & (1 << j) != 0 {
             // Its relative acceleration: only the two clusters it separates.
-            let rel = body_accel(sys, mode, load0, j).1 - body_accel(sys, mode, load0, j - 1).1;
+            let below = body_accel(sys, mode, load0, j - 1, &mut last).1;
+            let rel = body_accel(sys, mode, load0, j, &mut last).1 - below;
             let r = (mode.contact[j].slip_sign() * rel).max(0.0);
             bound += (sys.mus[j] * sys.normal[j] * (1.0 + eps) - k) * r;
             (4.0 * k * k).min(0.5 * sys.mass[j].min(sys.mass[j - 1]) * mass * r * r)
@@ -936,8 +966,9 @@ fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking:
 }
 
 /// The state of a walk: the best consistent assignment so far and how many
-/// were found; `bound`: drop branches that cannot beat the best on the
-/// rule's first two criteria; `limit`: stop after so many.
+/// rivals ([`Resolved::ambiguous`]) were found; `bound`: drop branches that
+/// cannot beat the best on the rule's first two criteria; `limit`: stop
+/// after so many.
 struct Search {
     /// The assignment being built (every contact of the walk's branch).
     mode: Mode,
@@ -1041,7 +1072,7 @@ impl<'a> Walk<'a> {
                 continue;
             }
             let mode = if breaks { &req.mode } else { &all_stuck };
-            let force = stuck_force(sys, mode, req.load0, j);
+            let force = stuck_force_up(sys, mode, req.load0, j, &mut (0, 0.0));
             let slips = breaks || force.abs() > sys.mus[j] * sys.normal[j];
             options[j] = match (slips, force > 0.0) {
                 (true, true) => [Back, Fwd, Stuck],
@@ -1060,18 +1091,6 @@ impl<'a> Walk<'a> {
             n_options,
             zero_ifaces,
         }
-    }
-
-    fn all_equal_friction(&self) -> bool {
-        (1..self.sys.n + 1)
-            .filter(|&j| self.index[j] != usize::MAX)
-            .all(|j| self.sys.mus[j] == self.sys.muk[j])
-    }
-
-    /// Whether a second consistent assignment exists (ambiguity), and tries.
-    fn second_consistent(&self) -> (bool, u32) {
-        let all = self.search(false, 2);
-        (all.count > 1, all.tries)
     }
 
     /// Walks the assignments: `bound`, and at most `limit` consistent ones.
@@ -1138,7 +1157,8 @@ impl<'a> Walk<'a> {
         if j > n {
             search.tries += 1;
             if self.close(open, n + 1, &search.mode).is_some() {
-                search.count += 1;
+                // (`broken`: [`ResolveRequest::keeps_breaking`], no rival.)
+                search.count += u32::from(!broken);
                 let key = self.key(&search.mode);
                 if search.best.is_none_or(|(b, _)| key < b) {
                     search.best = Some((key, search.mode));
@@ -1297,10 +1317,9 @@ pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
     }
 }
 
-/// Number of consistent assignments of the interfaces in `req.zero` (every
-/// stick / forward / backward combination), by enumeration: the oracle of
-/// the tests. Only mus > muk can make it exceed one, so the enumeration
-/// (3^k modes) is skipped otherwise.
+/// Number of rivals ([`Resolved::ambiguous`]) among the assignments of the
+/// interfaces in `req.zero`, by enumeration: the oracle of the tests. Only
+/// mus > muk can make it exceed one: the 3^k modes are skipped otherwise.
 pub fn consistent_count(sys: &System, req: &ResolveRequest) -> u32 {
     consistent_count_and_tries(sys, req).0
 }
@@ -1314,7 +1333,7 @@ pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u
         k += 1;
     }
     let zero = &list[..k];
-    if zero.iter().all(|&j| sys.mus[j] == sys.muk[j]) {
+    if equal_friction(sys, req.zero) {
         return (1, 0);
     }
     let mut count = 0;
@@ -1327,9 +1346,8 @@ pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u
                 [Contact::Stuck, Contact::SlipForward, Contact::SlipBackward][(rest % 3) as usize];
             rest /= 3;
         }
-        if violation(sys, &mode, req.zero, req.load0) <= CONSISTENCY_TOL {
-            count += 1;
-        }
+        let v = violation(sys, &mode, req.zero, req.load0);
+        count += u32::from(v <= CONSISTENCY_TOL && !req.keeps_breaking(&mode));
     }
     (count, tries)
 }
@@ -1382,51 +1400,5 @@ mod tests {
                 );
             }
         }
-    }
-
-    #[test]
-    fn clusters_follow_the_stuck_interfaces() {
-        let mut p = Params::default();
-        p.n_blocks = 3;
-        let sys = System::new(&p).unwrap();
-        let mut mode = Mode::all_stuck(&sys);
-        mode.contact[2] = Contact::SlipForward;
-        let d = Dynamics::new(&sys, &mode);
-        assert_eq!(d.n_clusters, 2);
-        assert_eq!(d.cluster_of[..4], [0, 0, 1, 1]);
-        // Cluster 1 (blocks 2, 3) is pushed back by friction muk2 N2.
-        let expected = -sys.muk[2] * sys.normal[2];
-        assert_eq!(d.slip_load[1], expected);
-        assert_eq!(d.slip_load[0], -expected);
-    }
-}
-
-#[cfg(test)]
-mod band_tests {
-    use super::*;
-    use crate::physics::params::Params;
-
-    #[test]
-    fn the_stick_band_is_inside_every_stick() {
-        // Expected: at the band's edges every stuck guard is still positive,
-        // and just beyond them (1e-9 relative) one is negative.
-        let sys = System::new(&Params::default()).unwrap();
-        let d = Dynamics::new(&sys, &Mode::all_stuck(&sys));
-        let guards = &d.guards[..d.n_guards];
-        assert_eq!(guards.len(), 2);
-        let fires = |a: f64| {
-            guards.iter().any(|g| match *g {
-                Guard::Stuck {
-                    mass_above,
-                    f_top,
-                    cap,
-                } => cap - (mass_above * a + f_top).abs() < 0.0,
-                Guard::Slip { .. } => false,
-            })
-        };
-        let (lo, hi) = safe_accel_band(guards);
-        assert!(lo < 0.0 && hi > 0.0);
-        assert!(!fires(lo) && !fires(hi));
-        assert!(fires(hi * (1.0 + 1e-9)) && fires(lo * (1.0 + 1e-9)));
     }
 }
