@@ -135,14 +135,7 @@ pub(super) fn structure_peaks_proved(
     [peak_u0, peak_a0]: [&mut f64; 2],
 ) -> [bool; 2] {
     let sag = 0.125 * h * h * s3;
-    let (e0, e1) = (z_abs[0], u1.abs());
-    let ends_u = if e0 > e1 { e0 } else { e1 };
-    let (e0, e1) = (a0.abs(), a1.abs());
-    let ends_a = if e0 > e1 { e0 } else { e1 };
-    let quick = [
-        ends_u + sag * map.one_over_three <= *peak_u0,
-        ends_a + sag <= *peak_a0,
-    ];
+    let quick = peaks_quick(map, [z[0], u1], [a0, a1], sag, [*peak_u0, *peak_a0]);
     // Both at once (one branch on the usual path).
     if quick[0] & quick[1] {
         return quick;
@@ -159,6 +152,26 @@ pub(super) fn structure_peaks_proved(
         })
     };
     [u_proved, a_proved]
+}
+
+/// The quick tests of [`structure_peaks_proved`] from `|u|` and `|A|` at
+/// the ends: the larger plus `sag = h²/8 s3` (`one_over_three` of it for u).
+#[inline(always)]
+pub(super) fn peaks_quick(
+    map: &ExactMap,
+    u: [f64; 2],
+    a: [f64; 2],
+    sag: f64,
+    peaks: [f64; 2],
+) -> [bool; 2] {
+    let (e0, e1) = (u[0].abs(), u[1].abs());
+    let ends_u = if e0 > e1 { e0 } else { e1 };
+    let (e0, e1) = (a[0].abs(), a[1].abs());
+    let ends_a = if e0 > e1 { e0 } else { e1 };
+    [
+        ends_u + sag * map.one_over_three <= peaks[0],
+        ends_a + sag <= peaks[1],
+    ]
 }
 
 /// A run of substeps of the bare structure (its forcing `p = cf - ag` per

@@ -26,8 +26,8 @@ use super::exact_events::raise_substep_peaks;
 use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
 use super::proofs::{
-    energy_run, in_band_proved, linear_guard_lasts, raise_peak_proved, slip_guard_proved,
-    structure_peaks_proved,
+    energy_run, in_band_proved, linear_guard_lasts, peaks_quick, raise_peak_proved,
+    slip_guard_proved, structure_peaks_proved,
 };
 use super::{move_bodies, Excitation, Piece, PieceSource, Simulator};
 use crate::physics::hermite;
@@ -308,15 +308,16 @@ impl Simulator {
             }
             // The bare structure: the substeps its energy proves at once
             // (`proofs::energy_run`) through the pieces the source promised
-            // (Fext constant), each paying its `∫|p|` from the budget.
+            // (Fext constant), each paying its `∫|p|` from the budget; where
+            // that is spent, the quick tests of the peaks and a new budget.
             if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
                 if wait > 0 {
                     wait -= 1;
                 } else {
                     let cf = load_accel + rule.accel(inp.ag, inp.fext);
                     let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
-                    let [mut budget, slack] =
-                        energy_run(rates, [u0, vel[0]], cf, [peak_u0, peak_a0]);
+                    let peaks = [peak_u0, peak_a0];
+                    let [mut budget, slack] = energy_run(rates, [u0, vel[0]], cf, peaks);
                     // In copies the loop keeps in registers.
                     let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
                     let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
@@ -327,13 +328,20 @@ impl Simulator {
                         let hs = c.h;
                         let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
                         let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
+                        let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
                         if cost + slack <= budget {
                             budget -= cost + slack;
                         } else {
-                            break;
+                            let a = [cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
+                            let sag = 0.125 * hs * hs * map.sup_v_abs(3, &z.map(f64::abs));
+                            let [u_ok, a_ok] = peaks_quick(map, [u, u1], a, sag, peaks);
+                            if !(u_ok && a_ok) {
+                                break;
+                            }
+                            budget = energy_run(rates, [u1, v1], cf, peaks)[0];
                         }
                         t = if c.i == c.n { c.t_end } else { t + hs };
-                        (u, v) = (dot(&row_u, &z), dot(&row_v, &z));
+                        (u, v) = (u1, v1);
                         s.add(&z);
                         i.ag += i.ag_rate * hs;
                         (c.i, n) = (c.i + 1, n + 1);
