@@ -93,29 +93,6 @@ impl WorkSums {
     }
 }
 
-/// The inputs over the current piece: values at the current substep's
-/// start, slopes over the piece.
-#[derive(Clone, Copy)]
-struct Inputs {
-    ag: f64,
-    fext: f64,
-    ag_rate: f64,
-    fext_rate: f64,
-}
-
-impl Inputs {
-    fn at(piece: &Piece, t: f64) -> Inputs {
-        let e = &piece.exc;
-        let (ag, fext) = e.at(t - piece.t_ref);
-        Inputs {
-            ag,
-            fext,
-            ag_rate: e.ag_rate,
-            fext_rate: e.fext_rate,
-        }
-    }
-}
-
 impl Simulator {
     /// Takes the substeps of `piece` from `piece.i` on, then those of the
     /// following `pieces`, until one cannot be proved free of switches:
@@ -250,7 +227,14 @@ impl Simulator {
         // Work of the substeps already summed and flushed.
         let mut work = [0.0; 2];
         let mut t0 = self.t;
-        let mut inp = Inputs::at(&cur, t0);
+        // The inputs: values at the current substep's start, slopes over
+        // the piece.
+        let (ag, fext) = cur.exc.at(t0 - cur.t_ref);
+        let mut inp = Excitation {
+            ag,
+            fext,
+            ..cur.exc
+        };
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
         // Substeps to wait after a failed try of an energy run (below).
         let (mut wait, cool) = (0, 8);
@@ -297,12 +281,7 @@ impl Simulator {
                     }
                     lean[1] = pieces.promised();
                     // A0 carries over: it is continuous (a jump of Fext ends the run).
-                    inp = Inputs {
-                        ag: exc.ag,
-                        fext: exc.fext,
-                        ag_rate: exc.ag_rate,
-                        fext_rate: exc.fext_rate,
-                    };
+                    inp = exc;
                     continue;
                 }
             }
@@ -310,50 +289,48 @@ impl Simulator {
             // (`proofs::energy_run`) through the pieces the source promised
             // (Fext constant), each paying its `∫|p|` from the budget; where
             // that is spent, the quick tests of the peaks and a new budget.
-            if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
-                if wait > 0 {
-                    wait -= 1;
-                } else {
-                    let cf = load_accel + rule.accel(inp.ag, inp.fext);
-                    let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
-                    let peaks = [peak_u0, peak_a0];
-                    let [mut budget, slack] = energy_run(rates, [u0, vel[0]], cf, peaks);
-                    // In copies the loop keeps in registers.
-                    let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
-                    let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
-                    loop {
-                        if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t) {
+            if RUNS && wait > 0 {
+                wait -= 1;
+            } else if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
+                let cf = load_accel + rule.accel(inp.ag, inp.fext);
+                let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
+                let peaks = [peak_u0, peak_a0];
+                let [mut budget, slack] = energy_run(rates, [u0, vel[0]], cf, peaks);
+                // In copies the loop keeps in registers.
+                let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
+                let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
+                loop {
+                    if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t) {
+                        break;
+                    }
+                    let hs = c.h;
+                    let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
+                    let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
+                    let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
+                    if cost + slack <= budget {
+                        budget -= cost + slack;
+                    } else {
+                        let a = [cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
+                        let sag = 0.125 * hs * hs * map.sup_v_abs(3, &z.map(f64::abs));
+                        let [u_ok, a_ok] = peaks_quick(map, [u, u1], a, sag, peaks);
+                        if !(u_ok && a_ok) {
                             break;
                         }
-                        let hs = c.h;
-                        let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
-                        let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
-                        let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
-                        if cost + slack <= budget {
-                            budget -= cost + slack;
-                        } else {
-                            let a = [cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
-                            let sag = 0.125 * hs * hs * map.sup_v_abs(3, &z.map(f64::abs));
-                            let [u_ok, a_ok] = peaks_quick(map, [u, u1], a, sag, peaks);
-                            if !(u_ok && a_ok) {
-                                break;
-                            }
-                            budget = energy_run(rates, [u1, v1], cf, peaks)[0];
-                        }
-                        t = if c.i == c.n { c.t_end } else { t + hs };
-                        (u, v) = (u1, v1);
-                        s.add(&z);
-                        i.ag += i.ag_rate * hs;
-                        (c.i, n) = (c.i + 1, n + 1);
+                        budget = energy_run(rates, [u1, v1], cf, peaks)[0];
                     }
-                    let before = taken;
-                    (cur, inp, lean, sums, t0, u0, vel[0], taken) = (c, i, l, s, t, u, v, n);
-                    if taken > before {
-                        a_abs = cf - w2 * u0 - cm * vel[0];
-                        continue;
-                    }
-                    wait = cool;
+                    t = if c.i == c.n { c.t_end } else { t + hs };
+                    (u, v) = (u1, v1);
+                    s.add(&z);
+                    i.ag += i.ag_rate * hs;
+                    (c.i, n) = (c.i + 1, n + 1);
                 }
+                let before = taken;
+                (cur, inp, lean, sums, t0, u0, vel[0], taken) = (c, i, l, s, t, u, v, n);
+                if taken > before {
+                    a_abs = cf - w2 * u0 - cm * vel[0];
+                    continue;
+                }
+                wait = cool;
             }
             // Every substep of a piece is `cur.h` long; the last ends at the
             // piece's end, which differs from `t0 + h` only by the rounding
@@ -513,7 +490,7 @@ impl Simulator {
 fn continue_piece(
     pieces: &mut impl PieceSource,
     cur: &mut Piece,
-    inp: &mut Inputs,
+    inp: &mut Excitation,
     lean: &mut [usize; 2],
     t0: f64,
 ) -> bool {
