@@ -118,10 +118,7 @@ pub(super) fn slip_guard_proved(
 /// Raises the structure's peaks of |u0| and |A0| over the substep from `z`
 /// (with `|z|`; end values `u1`, `v1`; the absolute acceleration `a0` and
 /// `a1` at the ends, its rates `jerks()`) where that is proved; returns
-/// which were.
-/// Quick tests first: the larger end plus `h²/8 sup|y''|` (`sup|u''| =
-/// sup|v'|`, `sup|A''| = sup|v'''| <= s3`); then the cubic bounds with the
-/// rates.
+/// which were: quick tests first ([`peaks_quick`]), then the cubic bounds.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn structure_peaks_proved(
@@ -135,7 +132,7 @@ pub(super) fn structure_peaks_proved(
     [peak_u0, peak_a0]: [&mut f64; 2],
 ) -> [bool; 2] {
     let sag = 0.125 * h * h * s3;
-    let quick = peaks_quick(map, [z[0], u1], [a0, a1], sag, [*peak_u0, *peak_a0]);
+    let quick = peaks_quick(map, [z[0], u1, a0, a1], sag, [*peak_u0, *peak_a0]);
     // Both at once (one branch on the usual path).
     if quick[0] & quick[1] {
         return quick;
@@ -154,24 +151,14 @@ pub(super) fn structure_peaks_proved(
     [u_proved, a_proved]
 }
 
-/// The quick tests of [`structure_peaks_proved`] from `|u|` and `|A|` at
-/// the ends: the larger plus `sag = h²/8 s3` (`one_over_three` of it for u).
+/// The quick tests of [`structure_peaks_proved`] from `ends = [u0, u1, A0,
+/// A1]`: the larger `|end|` plus `h²/8 sup|y''|`, with `sag = h²/8 s3`
+/// (`sup|u''| = sup|v'| <= one_over_three s3`, `sup|A''| = sup|v'''| <= s3`).
 #[inline(always)]
-pub(super) fn peaks_quick(
-    map: &ExactMap,
-    u: [f64; 2],
-    a: [f64; 2],
-    sag: f64,
-    peaks: [f64; 2],
-) -> [bool; 2] {
-    let (e0, e1) = (u[0].abs(), u[1].abs());
-    let ends_u = if e0 > e1 { e0 } else { e1 };
-    let (e0, e1) = (a[0].abs(), a[1].abs());
-    let ends_a = if e0 > e1 { e0 } else { e1 };
-    [
-        ends_u + sag * map.one_over_three <= peaks[0],
-        ends_a + sag <= peaks[1],
-    ]
+pub(super) fn peaks_quick(map: &ExactMap, ends: [f64; 4], sag: f64, peaks: [f64; 2]) -> [bool; 2] {
+    let larger = |a: f64, b: f64| if a.abs() > b.abs() { a.abs() } else { b.abs() };
+    let u = larger(ends[0], ends[1]) + sag * map.one_over_three;
+    [u <= peaks[0], larger(ends[2], ends[3]) + sag <= peaks[1]]
 }
 
 /// A run of substeps of the bare structure (its forcing `p = cf - ag` per

@@ -229,12 +229,8 @@ impl Simulator {
         let mut t0 = self.t;
         // The inputs: values at the current substep's start, slopes over
         // the piece.
-        let (ag, fext) = cur.exc.at(t0 - cur.t_ref);
-        let mut inp = Excitation {
-            ag,
-            fext,
-            ..cur.exc
-        };
+        let mut inp = cur.exc;
+        (inp.ag, inp.fext) = cur.exc.at(t0 - cur.t_ref);
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
         // Substeps to wait after a failed try of an energy run (below).
         let (mut wait, cool) = (0, 8);
@@ -310,9 +306,9 @@ impl Simulator {
                     if cost + slack <= budget {
                         budget -= cost + slack;
                     } else {
-                        let a = [cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
+                        let ends = [u, u1, cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
                         let sag = 0.125 * hs * hs * map.sup_v_abs(3, &z.map(f64::abs));
-                        let [u_ok, a_ok] = peaks_quick(map, [u, u1], a, sag, peaks);
+                        let [u_ok, a_ok] = peaks_quick(map, ends, sag, peaks);
                         if !(u_ok && a_ok) {
                             break;
                         }
@@ -399,7 +395,8 @@ impl Simulator {
                 ];
                 let cf = load_accel + rule.accel(inp.ag, inp.fext);
                 let rates = [w2, cm, cf, fext_rate_m];
-                if raise_substep_peaks(peaks, z, map.h, rates, map.degree, [u1, a1]).is_err() {
+                let (ends, fourth) = ([u1, v1, a1], [s3, map.five_over_three * s3]);
+                if raise_substep_peaks(peaks, z, map.h, rates, map.degree, ends, fourth).is_err() {
                     break;
                 }
             }
@@ -549,81 +546,69 @@ impl Rows {
     /// The map's own rows (`delta = 0`) and their rates in `delta`, from
     /// its Taylor sums: `[rows, rate]`.
     pub(super) fn of_map(map: &ExactMap) -> [Rows; 2] {
-        let accel = acceleration_row(map);
         let (u, v, hm) = (&map.u, &map.v, map.h);
+        // The acceleration relative to the support at the end, `p + p' h -
+        // w2 u1 - cm v1`, as a row.
+        let p = [0.0, 0.0, 1.0, hm];
+        let accel = std::array::from_fn(|k| p[k] - map.w2 * u[k] - map.cm * v[k]);
         // Σ (p - L)(U z - u) over products with p = z_2 (U's first entry
         // less one for the `- u`), Σ p' (h U - I) z with p' = z_3.
         let u0m1 = u[0] - 1.0;
         let w: [f64; 4] = std::array::from_fn(|j| hm * u[j] - map.int_u[j]);
         // Packed: 00, 11, 22, 33, 01, 02, 03, 12, 13, 23.
         let pair = |p: [f64; 10], v: [f64; 10]| std::array::from_fn(|k| [p[k], v[k]]);
+        let input = [
+            0.0,
+            0.0,
+            u[2],
+            w[3],
+            0.0,
+            u0m1,
+            w[0],
+            u[1],
+            w[1],
+            u[3] + w[2],
+        ];
         let rows = Rows {
             u: *u,
             v: *v,
-            work_pv: pair(
-                [
-                    0.0,
-                    0.0,
-                    u[2],
-                    w[3],
-                    0.0,
-                    u0m1,
-                    w[0],
-                    u[1],
-                    w[1],
-                    u[3] + w[2],
-                ],
-                map.quad,
-            ),
+            work_pv: pair(input, map.quad),
             work_l: [u0m1, u[1], u[2], u[3]],
             c: map.c,
         };
         // The rest `delta`, to first order: u' = v, v' the acceleration;
         // the input work's integrand at the end `(z_2 + h z_3 - L) (V z)`,
-        // the viscous one `(V z)²`.
+        // the viscous one `(V z)²` (the products off the diagonal doubled).
         let hv: [f64; 4] = std::array::from_fn(|j| hm * v[j]);
+        let input = [
+            0.0,
+            0.0,
+            v[2],
+            hv[3],
+            0.0,
+            v[0],
+            hv[0],
+            v[1],
+            hv[1],
+            v[3] + hv[2],
+        ];
+        let [a, b] = [
+            [0, 1, 2, 3, 0, 0, 0, 1, 1, 2],
+            [0, 1, 2, 3, 1, 2, 3, 2, 3, 3],
+        ];
+        let viscous = std::array::from_fn(|k| {
+            let f = if k < 4 { 1.0 } else { 2.0 };
+            f * v[a[k]] * v[b[k]]
+        });
         let rate = Rows {
             u: *v,
             v: accel,
-            work_pv: pair(
-                [
-                    0.0,
-                    0.0,
-                    v[2],
-                    hv[3],
-                    0.0,
-                    v[0],
-                    hv[0],
-                    v[1],
-                    hv[1],
-                    v[3] + hv[2],
-                ],
-                [
-                    v[0] * v[0],
-                    v[1] * v[1],
-                    v[2] * v[2],
-                    v[3] * v[3],
-                    2.0 * v[0] * v[1],
-                    2.0 * v[0] * v[2],
-                    2.0 * v[0] * v[3],
-                    2.0 * v[1] * v[2],
-                    2.0 * v[1] * v[3],
-                    2.0 * v[2] * v[3],
-                ],
-            ),
+            work_pv: pair(input, viscous),
             work_l: *v,
             c: 0.0,
         };
         [rows, rate]
     }
-}
-
-/// The structure cluster's acceleration relative to the support at the end
-/// of `map`'s substep as a row on `z = [u, v, p, p']`: `p + p' h - w2 u1 -
-/// cm v1` with `u1`, `v1` the map's rows.
-fn acceleration_row(map: &ExactMap) -> [f64; 4] {
-    let p = [0.0, 0.0, 1.0, map.h];
-    std::array::from_fn(|k| p[k] - map.w2 * map.u[k] - map.cm * map.v[k])
 }
 
 #[cfg(test)]
