@@ -61,10 +61,9 @@ fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, [u, v]: [&mut 
     (u.deg, v.deg) = (deg, deg);
 }
 
-/// For the driver (`sweep.rs`), over one whole substep from `z` where its
-/// bounds could not exclude a new interior peak: raises `peak_u` (when
-/// given) to the largest `|u|` and `peak_a` to the largest absolute
-/// acceleration `cf + cf' τ - w2 u - cm v`, exactly, on the Taylor
+/// For the driver (`sweep.rs`), over one whole substep from `z` where its bounds could not
+/// exclude a new interior peak: raises `peak_u` (when given) to the largest `|u|` and `peak_a` to
+/// the largest absolute acceleration `cf + cf' τ - w2 u - cm v`, exactly, on the Taylor
 /// polynomials; `ends`: u, v and A at the end; `fourth`: `sup|u''''|, sup|A''''|`.
 #[inline(never)]
 pub(super) fn raise_substep_peaks(
@@ -79,8 +78,7 @@ pub(super) fn raise_substep_peaks(
     let (mut u, mut v) = (Poly::default(), Poly::default());
     taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
-    // y = ku u + kv v + c0 + c1 τ (u, or A) and its rates at τ from the state
-    // there: v' = p - w2 u - cm v, v'' = p' - w2 v - cm v'.
+    // y = ku u + kv v + c0 + c1 τ (u, or A), y' and y'' at τ from the state.
     let y_at = |[ku, kv, c0, c1]: [f64; 4], t: f64, [u, v]: [f64; 2]| {
         let a = z[2] + z[3] * t - w2 * u - cm * v;
         let (j, y) = (z[3] - w2 * v - cm * a, ku * u + kv * v + c0 + c1 * t);

@@ -151,9 +151,8 @@ pub(super) fn structure_peaks_proved(
     [u_proved, a_proved]
 }
 
-/// The quick tests of [`structure_peaks_proved`] from `ends = [u0, u1, A0,
-/// A1]`: the larger `|end|` plus `h²/8 sup|y''|`, with `sag = h²/8 s3`
-/// (`sup|u''| = sup|v'| <= one_over_three s3`, `sup|A''| = sup|v'''| <= s3`).
+/// The quick tests of [`structure_peaks_proved`] from `ends = [u0, u1, A0, A1]`: the larger
+/// `|end|` plus `h²/8 sup|y''|` (`sup|u''| <= one_over_three s3`, `sup|A''| = sup|v'''| <= s3`).
 #[inline(always)]
 pub(super) fn peaks_quick(map: &ExactMap, ends: [f64; 4], sag: f64, peaks: [f64; 2]) -> [bool; 2] {
     let larger = |a: f64, b: f64| if a.abs() > b.abs() { a.abs() } else { b.abs() };

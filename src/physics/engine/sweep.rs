@@ -227,8 +227,7 @@ impl Simulator {
         // Work of the substeps already summed and flushed.
         let mut work = [0.0; 2];
         let mut t0 = self.t;
-        // The inputs: values at the current substep's start, slopes over
-        // the piece.
+        // The inputs (values at the substep's start, slopes over the piece).
         let mut inp = cur.exc;
         (inp.ag, inp.fext) = cur.exc.at(t0 - cur.t_ref);
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
@@ -281,10 +280,9 @@ impl Simulator {
                     continue;
                 }
             }
-            // The bare structure: the substeps its energy proves at once
-            // (`proofs::energy_run`) through the pieces the source promised
-            // (Fext constant), each paying its `∫|p|` from the budget; where
-            // that is spent, the quick tests of the peaks and a new budget.
+            // The bare structure: the substeps its energy proves at once (`proofs::energy_run`)
+            // through the pieces the source promised (Fext constant), each paying its `∫|p|`
+            // from the budget; where that is spent, the quick tests of the peaks, a new budget.
             if RUNS && wait > 0 {
                 wait -= 1;
             } else if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
@@ -547,8 +545,7 @@ impl Rows {
     /// its Taylor sums: `[rows, rate]`.
     pub(super) fn of_map(map: &ExactMap) -> [Rows; 2] {
         let (u, v, hm) = (&map.u, &map.v, map.h);
-        // The acceleration relative to the support at the end, `p + p' h -
-        // w2 u1 - cm v1`, as a row.
+        // The acceleration relative to the support at the end as a row.
         let p = [0.0, 0.0, 1.0, hm];
         let accel = std::array::from_fn(|k| p[k] - map.w2 * u[k] - map.cm * v[k]);
         // Σ (p - L)(U z - u) over products with p = z_2 (U's first entry
@@ -557,53 +554,60 @@ impl Rows {
         let w: [f64; 4] = std::array::from_fn(|j| hm * u[j] - map.int_u[j]);
         // Packed: 00, 11, 22, 33, 01, 02, 03, 12, 13, 23.
         let pair = |p: [f64; 10], v: [f64; 10]| std::array::from_fn(|k| [p[k], v[k]]);
-        let input = [
-            0.0,
-            0.0,
-            u[2],
-            w[3],
-            0.0,
-            u0m1,
-            w[0],
-            u[1],
-            w[1],
-            u[3] + w[2],
-        ];
         let rows = Rows {
             u: *u,
             v: *v,
-            work_pv: pair(input, map.quad),
+            work_pv: pair(
+                [
+                    0.0,
+                    0.0,
+                    u[2],
+                    w[3],
+                    0.0,
+                    u0m1,
+                    w[0],
+                    u[1],
+                    w[1],
+                    u[3] + w[2],
+                ],
+                map.quad,
+            ),
             work_l: [u0m1, u[1], u[2], u[3]],
             c: map.c,
         };
         // The rest `delta`, to first order: u' = v, v' the acceleration;
         // the input work's integrand at the end `(z_2 + h z_3 - L) (V z)`,
-        // the viscous one `(V z)²` (the products off the diagonal doubled).
+        // the viscous one `(V z)²`.
         let hv: [f64; 4] = std::array::from_fn(|j| hm * v[j]);
-        let input = [
-            0.0,
-            0.0,
-            v[2],
-            hv[3],
-            0.0,
-            v[0],
-            hv[0],
-            v[1],
-            hv[1],
-            v[3] + hv[2],
-        ];
-        let [a, b] = [
-            [0, 1, 2, 3, 0, 0, 0, 1, 1, 2],
-            [0, 1, 2, 3, 1, 2, 3, 2, 3, 3],
-        ];
-        let viscous = std::array::from_fn(|k| {
-            let f = if k < 4 { 1.0 } else { 2.0 };
-            f * v[a[k]] * v[b[k]]
-        });
         let rate = Rows {
             u: *v,
             v: accel,
-            work_pv: pair(input, viscous),
+            work_pv: pair(
+                [
+                    0.0,
+                    0.0,
+                    v[2],
+                    hv[3],
+                    0.0,
+                    v[0],
+                    hv[0],
+                    v[1],
+                    hv[1],
+                    v[3] + hv[2],
+                ],
+                [
+                    v[0] * v[0],
+                    v[1] * v[1],
+                    v[2] * v[2],
+                    v[3] * v[3],
+                    2.0 * v[0] * v[1],
+                    2.0 * v[0] * v[2],
+                    2.0 * v[0] * v[3],
+                    2.0 * v[1] * v[2],
+                    2.0 * v[1] * v[3],
+                    2.0 * v[2] * v[3],
+                ],
+            ),
             work_l: *v,
             c: 0.0,
         };
