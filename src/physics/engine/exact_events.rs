@@ -70,11 +70,10 @@ fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly
     [heads[0] + tails[0], heads[1] + tails[1], tails[1]]
 }
 
-/// For the driver (`sweep.rs`), over one whole substep from `z` where its
-/// bounds could not exclude a new interior peak: raises `peak_u` (when
-/// given) to the largest `|u|` and `peak_a` to the largest absolute
-/// acceleration `cf + cf' τ - w2 u - cm v`, exactly, on the Taylor
-/// polynomials; `ends` are u and the acceleration at the substep's end.
+/// For the driver (`sweep.rs`), over one whole substep from `z` where its bounds could not
+/// exclude a new interior peak: raises `peak_u` (when given) to the largest `|u|` and `peak_a` to
+/// the largest absolute acceleration `cf + cf' τ - w2 u - cm v`, exactly, on the Taylor
+/// polynomials; `ends`: u, v and A at the end; `fourth`: `sup|u''''|, sup|A''''|`.
 #[inline(never)]
 pub(super) fn raise_substep_peaks(
     [peak_u, peak_a]: [Option<&mut f64>; 2],
@@ -82,23 +81,52 @@ pub(super) fn raise_substep_peaks(
     h: f64,
     [w2, cm, cf, cf_rate]: [f64; 4],
     deg: usize,
-    [u_end, a_end]: [f64; 2],
+    [u_end, v_end, a_end]: [f64; 3],
+    fourth: [f64; 2],
 ) -> Result<(), Undecided> {
     let (mut u, mut v) = (Poly::default(), Poly::default());
     taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
+    // y = ku u + kv v + c0 + c1 τ (u, or A), y' and y'' at τ from the state.
+    let y_at = |[ku, kv, c0, c1]: [f64; 4], t: f64, [u, v]: [f64; 2]| {
+        let a = z[2] + z[3] * t - w2 * u - cm * v;
+        let (j, y) = (z[3] - w2 * v - cm * a, ku * u + kv * v + c0 + c1 * t);
+        [y, c1 + ku * v + kv * a, ku * a + kv * j]
+    };
+    // The usual case first (else None): y' changes sign and |y''| >= m > 0
+    // (its ends less h²/8 sup|y''''|), one zero; Newton's steps from the
+    // inverse cubic through the ends of y', y'' until |y'| <= m tol h.
+    let fast = |peak: &mut f64, k: [f64; 4], fourth: f64, y_end: f64| {
+        let ([y0, d0, e0], [_, d1, e1]) = (y_at(k, 0.0, [z[0], z[1]]), y_at(k, h, [u_end, v_end]));
+        let m = e0.abs().min(e1.abs()) - 0.125 * h * h * fourth;
+        (d0 * d1 < 0.0 && e0 * e1 > 0.0 && m > 0.0).then_some(())?;
+        let (x, dd) = (d0 / (d0 - d1), d1 - d0);
+        let mut t = h * x * x * (3.0 - 2.0 * x) + dd * x * (1.0 - x) * ((1.0 - x) / e0 - x / e1);
+        for _ in 0..4 {
+            let [y, d, e] = y_at(k, t, [u.eval(t / h), v.eval(t / h)]);
+            if d.abs() <= m * tol * h && (0.0..=h).contains(&t) {
+                *peak = peak.max(y0.abs()).max(y_end.abs()).max(y.abs());
+                return Some(());
+            }
+            t -= d / e;
+        }
+        None
+    };
     // (The driver's bounds have failed: the search at once.)
     if let Some(peak) = peak_u {
-        raise_peak_inside(peak, &u, Some(&v), u_end, 1.0, tol)?;
+        if fast(peak, [1.0, 0.0, 0.0, 0.0], fourth[0], u_end).is_none() {
+            raise_peak_inside(peak, &u, Some(&v), u_end, 1.0, tol)?;
+        }
     }
     if let Some(peak) = peak_a {
-        let a = &mut u; // u done with: the acceleration in its place
-        for (ak, vk) in a.c[..=deg].iter_mut().zip(&v.c) {
-            *ak = -w2 * *ak - cm * vk;
+        if fast(peak, [-w2, -cm, cf, cf_rate], fourth[1], a_end).is_none() {
+            let a = &mut u; // u done with: the acceleration in its place
+            for (ak, vk) in a.c[..=deg].iter_mut().zip(&v.c) {
+                *ak = -w2 * *ak - cm * vk;
+            }
+            (a.c[0], a.c[1]) = (a.c[0] + cf, a.c[1] + cf_rate * h);
+            raise_peak_inside(peak, a, None, a_end, 1.0, tol)?;
         }
-        a.c[0] += cf;
-        a.c[1] += cf_rate * h;
-        raise_peak_inside(peak, a, None, a_end, 1.0, tol)?;
     }
     Ok(())
 }

@@ -118,10 +118,7 @@ pub(super) fn slip_guard_proved(
 /// Raises the structure's peaks of |u0| and |A0| over the substep from `z`
 /// (with `|z|`; end values `u1`, `v1`; the absolute acceleration `a0` and
 /// `a1` at the ends, its rates `jerks()`) where that is proved; returns
-/// which were.
-/// Quick tests first: the larger end plus `h²/8 sup|y''|` (`sup|u''| =
-/// sup|v'|`, `sup|A''| = sup|v'''| <= s3`); then the cubic bounds with the
-/// rates.
+/// which were: quick tests first ([`peaks_quick`]), then the cubic bounds.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn structure_peaks_proved(
@@ -135,14 +132,7 @@ pub(super) fn structure_peaks_proved(
     [peak_u0, peak_a0]: [&mut f64; 2],
 ) -> [bool; 2] {
     let sag = 0.125 * h * h * s3;
-    let (e0, e1) = (z_abs[0], u1.abs());
-    let ends_u = if e0 > e1 { e0 } else { e1 };
-    let (e0, e1) = (a0.abs(), a1.abs());
-    let ends_a = if e0 > e1 { e0 } else { e1 };
-    let quick = [
-        ends_u + sag * map.one_over_three <= *peak_u0,
-        ends_a + sag <= *peak_a0,
-    ];
+    let quick = peaks_quick(map, [z[0], u1, a0, a1], sag, [*peak_u0, *peak_a0]);
     // Both at once (one branch on the usual path).
     if quick[0] & quick[1] {
         return quick;
@@ -159,6 +149,15 @@ pub(super) fn structure_peaks_proved(
         })
     };
     [u_proved, a_proved]
+}
+
+/// The quick tests of [`structure_peaks_proved`] from `ends = [u0, u1, A0, A1]`: the larger
+/// `|end|` plus `h²/8 sup|y''|` (`sup|u''| <= one_over_three s3`, `sup|A''| = sup|v'''| <= s3`).
+#[inline(always)]
+pub(super) fn peaks_quick(map: &ExactMap, ends: [f64; 4], sag: f64, peaks: [f64; 2]) -> [bool; 2] {
+    let larger = |a: f64, b: f64| if a.abs() > b.abs() { a.abs() } else { b.abs() };
+    let u = larger(ends[0], ends[1]) + sag * map.one_over_three;
+    [u <= peaks[0], larger(ends[2], ends[3]) + sag <= peaks[1]]
 }
 
 /// A run of substeps of the bare structure (its forcing `p = cf - ag` per

@@ -26,8 +26,8 @@ use super::exact_events::raise_substep_peaks;
 use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
 use super::proofs::{
-    energy_run, in_band_proved, linear_guard_lasts, raise_peak_proved, slip_guard_proved,
-    structure_peaks_proved,
+    energy_run, in_band_proved, linear_guard_lasts, peaks_quick, raise_peak_proved,
+    slip_guard_proved, structure_peaks_proved,
 };
 use super::{move_bodies, Excitation, Piece, PieceSource, Simulator};
 use crate::physics::hermite;
@@ -90,29 +90,6 @@ impl WorkSums {
         let with_load = dot(&rows.work_l, l);
         work[0] += mass * (pv[0] - load_accel * with_load);
         work[1] += rows.c * pv[1];
-    }
-}
-
-/// The inputs over the current piece: values at the current substep's
-/// start, slopes over the piece.
-#[derive(Clone, Copy)]
-struct Inputs {
-    ag: f64,
-    fext: f64,
-    ag_rate: f64,
-    fext_rate: f64,
-}
-
-impl Inputs {
-    fn at(piece: &Piece, t: f64) -> Inputs {
-        let e = &piece.exc;
-        let (ag, fext) = e.at(t - piece.t_ref);
-        Inputs {
-            ag,
-            fext,
-            ag_rate: e.ag_rate,
-            fext_rate: e.fext_rate,
-        }
     }
 }
 
@@ -250,7 +227,9 @@ impl Simulator {
         // Work of the substeps already summed and flushed.
         let mut work = [0.0; 2];
         let mut t0 = self.t;
-        let mut inp = Inputs::at(&cur, t0);
+        // The inputs (values at the substep's start, slopes over the piece).
+        let mut inp = cur.exc;
+        (inp.ag, inp.fext) = cur.exc.at(t0 - cur.t_ref);
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
         // Substeps to wait after a failed try of an energy run (below).
         let (mut wait, cool) = (0, 8);
@@ -297,55 +276,55 @@ impl Simulator {
                     }
                     lean[1] = pieces.promised();
                     // A0 carries over: it is continuous (a jump of Fext ends the run).
-                    inp = Inputs {
-                        ag: exc.ag,
-                        fext: exc.fext,
-                        ag_rate: exc.ag_rate,
-                        fext_rate: exc.fext_rate,
-                    };
+                    inp = exc;
                     continue;
                 }
             }
-            // The bare structure: the substeps its energy proves at once
-            // (`proofs::energy_run`) through the pieces the source promised
-            // (Fext constant), each paying its `∫|p|` from the budget.
-            if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
-                if wait > 0 {
-                    wait -= 1;
-                } else {
-                    let cf = load_accel + rule.accel(inp.ag, inp.fext);
-                    let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
-                    let [mut budget, slack] =
-                        energy_run(rates, [u0, vel[0]], cf, [peak_u0, peak_a0]);
-                    // In copies the loop keeps in registers.
-                    let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
-                    let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
-                    loop {
-                        if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t) {
+            // The bare structure: the substeps its energy proves at once (`proofs::energy_run`)
+            // through the pieces the source promised (Fext constant), each paying its `∫|p|`
+            // from the budget; where that is spent, the quick tests of the peaks, a new budget.
+            if RUNS && wait > 0 {
+                wait -= 1;
+            } else if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
+                let cf = load_accel + rule.accel(inp.ag, inp.fext);
+                let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
+                let peaks = [peak_u0, peak_a0];
+                let [mut budget, slack] = energy_run(rates, [u0, vel[0]], cf, peaks);
+                // In copies the loop keeps in registers.
+                let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
+                let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
+                loop {
+                    if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t) {
+                        break;
+                    }
+                    let hs = c.h;
+                    let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
+                    let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
+                    let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
+                    if cost + slack <= budget {
+                        budget -= cost + slack;
+                    } else {
+                        let ends = [u, u1, cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
+                        let sag = 0.125 * hs * hs * map.sup_v_abs(3, &z.map(f64::abs));
+                        let [u_ok, a_ok] = peaks_quick(map, ends, sag, peaks);
+                        if !(u_ok && a_ok) {
                             break;
                         }
-                        let hs = c.h;
-                        let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
-                        let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
-                        if cost + slack <= budget {
-                            budget -= cost + slack;
-                        } else {
-                            break;
-                        }
-                        t = if c.i == c.n { c.t_end } else { t + hs };
-                        (u, v) = (dot(&row_u, &z), dot(&row_v, &z));
-                        s.add(&z);
-                        i.ag += i.ag_rate * hs;
-                        (c.i, n) = (c.i + 1, n + 1);
+                        budget = energy_run(rates, [u1, v1], cf, peaks)[0];
                     }
-                    let before = taken;
-                    (cur, inp, lean, sums, t0, u0, vel[0], taken) = (c, i, l, s, t, u, v, n);
-                    if taken > before {
-                        a_abs = cf - w2 * u0 - cm * vel[0];
-                        continue;
-                    }
-                    wait = cool;
+                    t = if c.i == c.n { c.t_end } else { t + hs };
+                    (u, v) = (u1, v1);
+                    s.add(&z);
+                    i.ag += i.ag_rate * hs;
+                    (c.i, n) = (c.i + 1, n + 1);
                 }
+                let before = taken;
+                (cur, inp, lean, sums, t0, u0, vel[0], taken) = (c, i, l, s, t, u, v, n);
+                if taken > before {
+                    a_abs = cf - w2 * u0 - cm * vel[0];
+                    continue;
+                }
+                wait = cool;
             }
             // Every substep of a piece is `cur.h` long; the last ends at the
             // piece's end, which differs from `t0 + h` only by the rounding
@@ -414,7 +393,8 @@ impl Simulator {
                 ];
                 let cf = load_accel + rule.accel(inp.ag, inp.fext);
                 let rates = [w2, cm, cf, fext_rate_m];
-                if raise_substep_peaks(peaks, z, map.h, rates, map.degree, [u1, a1]).is_err() {
+                let (ends, fourth) = ([u1, v1, a1], [s3, map.five_over_three * s3]);
+                if raise_substep_peaks(peaks, z, map.h, rates, map.degree, ends, fourth).is_err() {
                     break;
                 }
             }
@@ -505,7 +485,7 @@ impl Simulator {
 fn continue_piece(
     pieces: &mut impl PieceSource,
     cur: &mut Piece,
-    inp: &mut Inputs,
+    inp: &mut Excitation,
     lean: &mut [usize; 2],
     t0: f64,
 ) -> bool {
@@ -564,8 +544,10 @@ impl Rows {
     /// The map's own rows (`delta = 0`) and their rates in `delta`, from
     /// its Taylor sums: `[rows, rate]`.
     pub(super) fn of_map(map: &ExactMap) -> [Rows; 2] {
-        let accel = acceleration_row(map);
         let (u, v, hm) = (&map.u, &map.v, map.h);
+        // The acceleration relative to the support at the end as a row.
+        let p = [0.0, 0.0, 1.0, hm];
+        let accel = std::array::from_fn(|k| p[k] - map.w2 * u[k] - map.cm * v[k]);
         // Σ (p - L)(U z - u) over products with p = z_2 (U's first entry
         // less one for the `- u`), Σ p' (h U - I) z with p' = z_3.
         let u0m1 = u[0] - 1.0;
@@ -631,14 +613,6 @@ impl Rows {
         };
         [rows, rate]
     }
-}
-
-/// The structure cluster's acceleration relative to the support at the end
-/// of `map`'s substep as a row on `z = [u, v, p, p']`: `p + p' h - w2 u1 -
-/// cm v1` with `u1`, `v1` the map's rows.
-fn acceleration_row(map: &ExactMap) -> [f64; 4] {
-    let p = [0.0, 0.0, 1.0, map.h];
-    std::array::from_fn(|k| p[k] - map.w2 * map.u[k] - map.cm * map.v[k])
 }
 
 #[cfg(test)]
