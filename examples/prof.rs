@@ -25,7 +25,7 @@ fn main() {
         "b1" => common::broadband_record(&mut common::Rng(0xb0ad1e), 20.0, 0.005),
         "b2" => common::broadband_record(&mut common::Rng(0xf1e1d5e), 20.0, 0.005),
         // Coarse broadband records: c1 at 0.01 s, c2 and c3 at 0.02 s.
-        "c1" | "c2" | "c3" => coarse_record(rec),
+        "c1" | "c2" | "c3" => common::coarse_record(rec),
         // Any other record: a path, its first 20 s.
         path => common::truncate(
             &stacked_live_load::GroundMotion::read(path.as_ref(), 9.81).unwrap(),
@@ -87,15 +87,4 @@ fn main() {
         }
     }
     println!("{scene} {rec}: {events} events");
-}
-
-/// Coarse broadband records (seeds of their own): c1 at 0.01 s, c2 and c3
-/// at 0.02 s.
-fn coarse_record(name: &str) -> stacked_live_load::GroundMotion {
-    let (seed, dt) = match name {
-        "c1" => (0xc0a51, 0.01),
-        "c2" => (0xc0a52, 0.02),
-        _ => (0xc0a53, 0.02),
-    };
-    common::broadband_record(&mut common::Rng(seed), 20.0, dt)
 }

@@ -26,7 +26,7 @@ fn main() {
             .split(':')
             .map(|p| {
                 if matches!(p, "c1" | "c2" | "c3") {
-                    return (p.to_string(), coarse_record(p));
+                    return (p.to_string(), common::coarse_record(p));
                 }
                 let path = std::path::Path::new(p);
                 let name = path.file_stem().unwrap().to_string_lossy().into_owned();
@@ -118,15 +118,4 @@ fn main() {
             );
         }
     }
-}
-
-/// Coarse broadband records (seeds of their own): c1 at 0.01 s, c2 and c3
-/// at 0.02 s.
-fn coarse_record(name: &str) -> stacked_live_load::GroundMotion {
-    let (seed, dt) = match name {
-        "c1" => (0xc0a51, 0.01),
-        "c2" => (0xc0a52, 0.02),
-        _ => (0xc0a53, 0.02),
-    };
-    common::broadband_record(&mut common::Rng(seed), 20.0, dt)
 }

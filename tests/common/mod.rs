@@ -973,6 +973,18 @@ pub fn median(mut x: Vec<f64>) -> f64 {
     x[x.len() / 2]
 }
 
+/// The benches' coarse broadband records (seeds of their own, 20 s): `c1` at
+/// 0.01 s, `c2` and `c3` at 0.02 s (most real records are sampled at 0.01 or
+/// 0.02 s).
+pub fn coarse_record(name: &str) -> GroundMotion {
+    let (seed, dt) = match name {
+        "c1" => (0xc0a51, 0.01),
+        "c2" => (0xc0a52, 0.02),
+        _ => (0xc0a53, 0.02),
+    };
+    broadband_record(&mut Rng(seed), 20.0, dt)
+}
+
 /// A broadband record: 60 sines with log-uniform frequencies in 0.1–25 Hz,
 /// amplitudes falling as 1/sqrt(f), random phases, a build-up and a decay,
 /// scaled to a PGA drawn in 0.3–0.6 g; sampled every `dt`.
