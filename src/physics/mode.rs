@@ -821,7 +821,7 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     // the others.
     let equal = equal_friction(sys, req.zero);
     let (ambiguous, tries) = match search.count {
-        0 | 1 => ambiguity(equal, sys, req, &mode),
+        0 | 1 => ambiguity(sys, req, &mode),
         _ => (!equal, 0),
     };
     Resolved {
@@ -849,7 +849,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
     }
     let mut stuck = req.mode;
     // One pass over the interfaces of `zero`, from the bottom.
-    let (mut rest, equal) = (zero, equal_friction(sys, zero));
+    let mut rest = zero;
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
@@ -883,7 +883,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
                         }
                         tries += 1;
                         if consistent(sys, &mode, zero, req.load0) {
-                            let (ambiguous, more_tries) = ambiguity(equal, sys, req, &mode);
+                            let (ambiguous, more_tries) = ambiguity(sys, req, &mode);
                             return Some(Resolved {
                                 mode,
                                 consistent: true,
@@ -905,8 +905,8 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
 /// a rival unless at its limit ([`ResolveRequest::keeps_breaking`]); one stick slipped the way its
 /// force drives it past `muk N` if consistent; else the unbounded walk. (Inlined: sweep 7% slower.)
 #[inline(never)]
-fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
-    if equal {
+fn ambiguity(sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
+    if equal_friction(sys, req.zero) {
         return (false, 0);
     }
     let (zero, load0, mut stuck) = (req.zero & !free_mask(sys), req.load0, *mode);
