@@ -1391,7 +1391,6 @@ fn bits_to_ifaces(bits: u32, list: &[usize]) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::params::Params;
 
     #[test]
     fn subsets_come_in_the_order_of_a_full_scan() {
