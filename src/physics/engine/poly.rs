@@ -383,7 +383,7 @@ const GAUSS_12: [[f64; 6]; 2] = [
 /// for `deg <= 9` (`ρ = h (ω + c/m) <= 0.0692`), else 12 (to 23). As `v''' = -ω² v' - (c/m) v''`
 /// (a load linear in time), `c_(k+3) = -((ωh)² c_(k+1) / (k+2) + (hc/m) c_(k+2)) / (k+3)`: the
 /// terms past degree 2 fall geometrically from `ρ (|c1| + |c2|)`, while `∫ v² >= 0.0027 (c0² +
-/// c1² + c2²)` (3×3 Hilbert matrix). Measured, the rules truncate below 5e-20 (6 points) and
+/// c1² + c2²)` (3×3 Hilbert matrix). Measured, the rules truncate below 6e-20 (6 points) and
 /// 1e-25 (12) of the integral; the sums round at a few ulps of it.
 #[inline]
 pub(super) fn integral_of_square(p: &Poly, s: f64) -> f64 {
