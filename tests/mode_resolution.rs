@@ -425,6 +425,38 @@ fn the_ambiguity_count_does_not_flip_with_rounding() {
     assert!(ambiguous > 0, "the count must be exercised");
 }
 
+#[test]
+fn a_breaking_stick_that_another_slip_relieves_is_a_rival() {
+    // A review's case (graded stack, KJM000 at 10.44 s): interface 1 reaches
+    // mus N (must break); the rule slips it, but interface 2 slipping
+    // instead leaves it stuck well inside its capacity, a second solution
+    // of the contact law (only the state just left, at the limit, is no
+    // rival). Two blocks, muk2 in [muk1, mus1): |F1| = 0.92 mus N there.
+    let mut p = Params::default();
+    p.n_blocks = 2;
+    (p.mus[0], p.muk[0], p.mus[1], p.muk[1]) = (0.3, 0.2, 0.4, 0.25);
+    let sys = System::new(&p).unwrap();
+    let limit = sys.mus[1] * sys.normal[1];
+    let load0 = limit * (sys.mass[0] + sys.mass[1] + sys.mass[2]) / (sys.mass[1] + sys.mass[2]);
+    let req = ResolveRequest {
+        mode: Mode::all_stuck(&sys),
+        zero: 0b110,
+        must_break: 0b10,
+        was_stuck: 0b110,
+        load0,
+    };
+    let res = mode::resolve(&sys, &req);
+    assert_eq!(
+        res.mode.contact[1..3],
+        [Contact::SlipBackward, Contact::Stuck]
+    );
+    let mut rival = req.mode;
+    rival.contact[2] = Contact::SlipBackward;
+    assert!(mode::violation(&sys, &rival, req.zero, load0) < -0.05);
+    assert_eq!(mode::consistent_count(&sys, &req), 2);
+    assert!(res.ambiguous && mode::resolve_by_enumeration(&sys, &req).ambiguous);
+}
+
 // (Moved from src/physics/mode.rs: they use its public items only.)
 
 #[test]

@@ -592,10 +592,10 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     true
 }
 
-/// Whether mus = muk at every interface of `zero` with friction: then one
-/// assignment at most is consistent, and none is ambiguous.
+/// Whether mus = muk at every interface of `zero` (free ones: both 0): then
+/// one assignment at most is consistent, and none is ambiguous.
 fn equal_friction(sys: &System, zero: u32) -> bool {
-    (1..sys.n + 1).all(|j| zero & (1 << j) == 0 || sys.mus[j] == sys.muk[j] || sys.is_free(j))
+    (1..sys.n + 1).all(|j| zero & (1 << j) == 0 || sys.mus[j] == sys.muk[j])
 }
 
 /// Interfaces (bit j) that carry no friction.
@@ -722,11 +722,14 @@ pub struct ResolveRequest {
 }
 
 impl ResolveRequest {
-    /// Whether `mode` keeps a stick of `must_break` (in `zero`): last under
-    /// rule 1 of [`resolve`], never a rival ([`Resolved::ambiguous`]).
-    pub fn keeps_breaking(&self, mode: &Mode) -> bool {
-        let breaking = self.zero & self.must_break;
-        (1..mode.n + 1).any(|j| breaking & (1 << j) != 0 && mode.is_stuck(j))
+    /// Whether `mode` keeps a stick of `must_break` at its limit, `|F| >= mus N (1 - 1e-8)`: the
+    /// state just left, consistent or not by rounding, no rival. Its guard fired at `mus N (1 +
+    /// 1e-10)` within 1e-12 s, so `|F|` within 1e-9 of it; a slip elsewhere relieves by percents.
+    pub fn keeps_breaking(&self, sys: &System, mode: &Mode) -> bool {
+        let (breaking, mut last) = (self.zero & self.must_break, (0, 0.0));
+        let limit = |j: usize| sys.mus[j] * sys.normal[j] * (1.0 - 1e-8);
+        let mut kept = (1..mode.n + 1).filter(|&j| breaking & (1 << j) != 0 && mode.is_stuck(j));
+        kept.any(|j| stuck_force_up(sys, mode, self.load0, j, &mut last).abs() >= limit(j))
     }
 }
 
@@ -738,10 +741,8 @@ pub struct Resolved {
     /// False when no assignment satisfied the contact law within
     /// [`CONSISTENCY_TOL`] and the least violating one was taken.
     pub consistent: bool,
-    /// Whether the selection rule chose among several consistent assignments
-    /// (rivals: with mus > muk only), none keeping a stick of `must_break`
-    /// ([`ResolveRequest::keeps_breaking`]): the state the law has just left,
-    /// consistent or not by rounding, is no rival.
+    /// Whether the rule chose among several consistent assignments (rivals, mus > muk only),
+    /// none keeping a stick of `must_break` at its limit ([`ResolveRequest::keeps_breaking`]).
     pub ambiguous: bool,
     /// Assignments tried (the work of the resolution).
     pub tries: u32,
@@ -779,10 +780,8 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
 fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let (zero, mut mode) = (req.zero & !free_mask(sys), req.mode);
     let ifaces = || (1..sys.n + 1).filter(move |&j| zero & (1 << j) != 0);
-    for j in ifaces() {
-        (sys.mus[j] == sys.muk[j]).then_some(())?;
-        mode.contact[j] = Contact::Stuck;
-    }
+    equal_friction(sys, zero).then_some(())?;
+    ifaces().for_each(|j| mode.contact[j] = Contact::Stuck);
     for tries in 1..zero.count_ones() + 2 {
         if (tries > 1 || zero & req.must_break != 0) && consistent(sys, &mode, zero, req.load0) {
             let (consistent, ambiguous) = (true, false);
@@ -822,7 +821,7 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     // the others.
     let equal = equal_friction(sys, req.zero);
     let (ambiguous, tries) = match search.count {
-        0 | 1 => ambiguity(equal, sys, req, &mode),
+        0 | 1 => ambiguity(sys, req, &mode),
         _ => (!equal, 0),
     };
     Resolved {
@@ -850,11 +849,10 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
     }
     let mut stuck = req.mode;
     // One pass over the interfaces of `zero`, from the bottom.
-    let (mut rest, mut equal) = (zero, true);
+    let mut rest = zero;
     while rest != 0 {
         let j = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        equal &= sys.mus[j] == sys.muk[j]; // (equal_friction, in the pass)
         stuck.contact[j] = Contact::Stuck;
     }
     let others = zero & !breaking;
@@ -885,7 +883,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
                         }
                         tries += 1;
                         if consistent(sys, &mode, zero, req.load0) {
-                            let (ambiguous, more_tries) = ambiguity(equal, sys, req, &mode);
+                            let (ambiguous, more_tries) = ambiguity(sys, req, &mode);
                             return Some(Resolved {
                                 mode,
                                 consistent: true,
@@ -901,29 +899,40 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
     None
 }
 
-/// The ambiguity of the chosen `mode` and its tries: none where mus = muk, where `mode` keeps
-/// a stick of `must_break` (a rival would rank first) or where [`only_consistent`] covers every
-/// rival (a slip of `must_break` sticking makes none; a free interface in `zero` fails it); a
-/// rival where one stick slips the way its force drives it past `muk N`; else the unbounded
-/// walk. Out of line: inlined, the walk moved the sweep's code (the bare structure 7% slower).
+/// The ambiguity of the chosen `mode` and its tries: none where mus = muk or [`only_consistent`]
+/// leaves only rivals sticking a slip of `must_break` (a free one in `zero` fails it) with none
+/// in `mode`; with one, around `mode` with it stuck (their terms there are zero), only that one,
+/// a rival unless at its limit ([`ResolveRequest::keeps_breaking`]); one stick slipped the way its
+/// force drives it past `muk N` if consistent; else the unbounded walk. (Inlined: sweep 7% slower.)
 #[inline(never)]
-fn ambiguity(equal: bool, sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
-    if equal || req.keeps_breaking(mode) {
+fn ambiguity(sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
+    if equal_friction(sys, req.zero) {
         return (false, 0);
     }
-    let (zero, load0) = (req.zero & !free_mask(sys), req.load0);
-    if only_consistent(sys, mode, req.zero, load0, zero & !req.must_break) {
-        return (false, 0);
+    let (zero, load0, mut stuck) = (req.zero & !free_mask(sys), req.load0, *mode);
+    let slipping = (1..sys.n + 1).fold(0, |m, j| m | u32::from(!mode.is_stuck(j)) << j);
+    let (others, slips) = (zero & !req.must_break, zero & req.must_break & slipping);
+    if slips.count_ones() < 2 && only_consistent(sys, mode, req.zero, load0, others) {
+        if slips == 0 {
+            return (false, 0);
+        }
+        stuck.contact[slips.trailing_zeros() as usize] = Contact::Stuck;
+        if consistent(sys, &stuck, zero & !slips, load0)
+            && only_consistent(sys, &stuck, req.zero & !slips, load0, others)
+        {
+            let rival = consistent(sys, &stuck, zero, load0) && !req.keeps_breaking(sys, &stuck);
+            return (rival && !req.keeps_breaking(sys, mode), 2);
+        }
     }
-    let (mut tries, mut last) = (0, (0, 0.0));
-    for j in (1..sys.n + 1).filter(|&j| zero & (1 << j) != 0 && mode.is_stuck(j)) {
+    let (mut tries, mut last, counted) = (0, (0, 0.0), !req.keeps_breaking(sys, mode));
+    for j in (1..sys.n + 1).filter(|&j| counted && zero & (1 << j) != 0 && mode.is_stuck(j)) {
         let force = stuck_force_up(sys, mode, load0, j, &mut last);
         if force.abs() > sys.muk[j] * sys.normal[j] {
             let mut rival = *mode;
             rival.contact[j] =
                 [Contact::SlipForward, Contact::SlipBackward][usize::from(force > 0.0)];
             tries += 1;
-            if consistent(sys, &rival, zero, load0) {
+            if consistent(sys, &rival, zero, load0) && !req.keeps_breaking(sys, &rival) {
                 return (true, tries);
             }
         }
@@ -1157,8 +1166,7 @@ impl<'a> Walk<'a> {
         if j > n {
             search.tries += 1;
             if self.close(open, n + 1, &search.mode).is_some() {
-                // (`broken`: [`ResolveRequest::keeps_breaking`], no rival.)
-                search.count += u32::from(!broken);
+                search.count += u32::from(!self.req.keeps_breaking(self.sys, &search.mode));
                 let key = self.key(&search.mode);
                 if search.best.is_none_or(|(b, _)| key < b) {
                     search.best = Some((key, search.mode));
@@ -1347,7 +1355,7 @@ pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u
             rest /= 3;
         }
         let v = violation(sys, &mode, req.zero, req.load0);
-        count += u32::from(v <= CONSISTENCY_TOL && !req.keeps_breaking(&mode));
+        count += u32::from(v <= CONSISTENCY_TOL && !req.keeps_breaking(sys, &mode));
     }
     (count, tries)
 }
@@ -1383,7 +1391,6 @@ fn bits_to_ifaces(bits: u32, list: &[usize]) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::params::Params;
 
     #[test]
     fn subsets_come_in_the_order_of_a_full_scan() {
