@@ -95,22 +95,24 @@ pub(super) fn in_band_proved(
 
 /// Whether the slip guard between the structure's cluster and the one above
 /// stays positive over a substep of length `h`: its ends `g0`, `g1` (the
-/// signed relative velocity), `|g''| <= bound() <= coarse`, and (only when
-/// those do not decide) its rates at the ends, `rates()`.
+/// signed relative velocity), `|g''| <= bound() <= coarse`, `|g'''| <= s3`,
+/// and (only when those do not decide) `rates()`: `g'` at the ends, `g''(0)`.
 #[inline(always)]
 pub(super) fn slip_guard_proved(
     [g0, g1]: [f64; 2],
-    rates: impl FnOnce() -> [f64; 2],
+    rates: impl FnOnce() -> [f64; 3],
     h: f64,
-    coarse: f64,
+    [coarse, s3]: [f64; 2],
     bound: impl FnOnce() -> f64,
 ) -> bool {
     let clear = |bound: f64| g0 > 0.125 * h * h * bound && g1 > 0.125 * h * h * bound;
     clear(coarse) || {
         let bound = bound();
         clear(bound) || {
-            let [d0, d1] = rates();
-            stays_positive([g0, d0, g1, d1], h, bound)
+            let [d0, d1, c0] = rates();
+            // A slip just begun (g0 near 0): g >= g0 + τ (d0 + min(0, c0 h/2) - s3 h²/6).
+            (g0 >= 0.0 && d0 + (0.5 * c0 * h).min(0.0) > s3 * h * h / 6.0)
+                || stays_positive([g0, d0, g1, d1], h, bound)
         }
     }
 }

@@ -175,7 +175,6 @@ impl Simulator {
         debug_assert!(
             d.prescribed || load_accel.to_bits() == (d.slip_load[0] * inv_mass).to_bits()
         );
-        let prescribed = AG;
         debug_assert_eq!(AG, sys.prescribed());
         let rule = d.input_rule::<AG>();
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
@@ -251,8 +250,7 @@ impl Simulator {
                     };
                     // A jump of Fext, or a bad value: the piece is begun anew;
                     // on a prescribed support a jump of ag too, or any Fext.
-                    let on_support =
-                        prescribed && (is_jump(exc.ag, inp.ag) || exc.fext_rate != 0.0);
+                    let on_support = AG && (is_jump(exc.ag, inp.ag) || exc.fext_rate != 0.0);
                     if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() || on_support {
                         pending = Some((t_end, exc));
                         break;
@@ -373,9 +371,10 @@ impl Simulator {
                 // The structure's slip guard; |g''| <= sup|v0''| + |ag'|, at
                 // most `two_over_three` sup|v0'''| + |ag'|.
                 let (g0, g1) = (sign0 * (vel[1] - vel[0]), sign0 * (v_end[1] - v1));
-                let rates = || [sign0 * (accel_c[1] - a_abs), sign0 * (accel_c[1] - a1)];
+                let d = |a: f64| sign0 * (accel_c[1] - a);
+                let rates = || [d(a_abs), d(a1), -sign0 * jerks()[0]];
                 let ag_rate = inp.ag_rate.abs();
-                let coarse = map.two_over_three * s3 + ag_rate;
+                let coarse = [map.two_over_three * s3 + ag_rate, s3];
                 let bound = || map.sup_v_abs(2, &z_abs) + ag_rate;
                 if !slip_guard_proved([g0, g1], rates, hs, coarse, bound) {
                     break;
