@@ -95,22 +95,24 @@ pub(super) fn in_band_proved(
 
 /// Whether the slip guard between the structure's cluster and the one above
 /// stays positive over a substep of length `h`: its ends `g0`, `g1` (the
-/// signed relative velocity), `|g''| <= bound() <= coarse`, and (only when
-/// those do not decide) its rates at the ends, `rates()`.
+/// signed relative velocity), `|g''| <= bound() <= coarse`, `|g'''| <= s3`,
+/// and (only when those do not decide) `rates()`: `g'` at the ends, `g''(0)`.
 #[inline(always)]
 pub(super) fn slip_guard_proved(
     [g0, g1]: [f64; 2],
-    rates: impl FnOnce() -> [f64; 2],
+    rates: impl FnOnce() -> [f64; 3],
     h: f64,
-    coarse: f64,
+    [coarse, s3]: [f64; 2],
     bound: impl FnOnce() -> f64,
 ) -> bool {
     let clear = |bound: f64| g0 > 0.125 * h * h * bound && g1 > 0.125 * h * h * bound;
     clear(coarse) || {
         let bound = bound();
         clear(bound) || {
-            let [d0, d1] = rates();
-            stays_positive([g0, d0, g1, d1], h, bound)
+            let [d0, d1, c0] = rates();
+            // A slip just begun (g0 near 0): g >= g0 + τ (d0 + min(0, c0 h/2) - s3 h²/6).
+            (g0 >= 0.0 && d0 + (0.5 * c0 * h).min(0.0) > s3 * h * h / 6.0)
+                || stays_positive([g0, d0, g1, d1], h, bound)
         }
     }
 }
@@ -160,22 +162,22 @@ pub(super) fn peaks_quick(map: &ExactMap, ends: [f64; 4], sag: f64, peaks: [f64;
     [u <= peaks[0], larger(ends[2], ends[3]) + sag <= peaks[1]]
 }
 
-/// A run of substeps of the bare structure (its forcing `p = cf - ag` per
-/// unit mass, `cf` constant) proved at once free of new peaks: `[budget,
-/// slack]`, each substep paying `h (|p(0)| + |p(h)|)/2 + slack`. With `r =
-/// sqrt(v² + w2 u²)`, `(r²/2)' = p v - cm v² <= |p| r`: `r` grows by `∫|p|`
-/// at most (the trapezoid bounds it, `|p|` convex on a substep), and `|u|
-/// <= r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the peaks.
-/// Margins (1e-9, 1e-12 a substep) cover the states' rounding. `[w2, ω,
-/// 1/sqrt(w2 + cm²)]`: the structure's.
+/// A run of substeps of the structure's cluster alone (its forcing `p = cf - ag` per unit mass,
+/// `cf` constant) proved at once free of new peaks and in the stick band: `[budget, slack]`, each
+/// substep paying `h (|p(0)| + |p(h)|)/2 + slack`. With `r = sqrt(v² + w2 u²)`, `(r²/2)' = p v - cm
+/// v² <= |p| r`: `r` grows by `∫|p|` at most (the trapezoid bounds it, `|p|` convex on a substep),
+/// and `|u| <= r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the peaks and inside the band
+/// `[lo, hi]` (±f64::MAX without one). Margins (1e-9, 1e-12 a substep) cover the states' rounding.
+/// `[w2, ω, 1/sqrt(w2 + cm²)]`: the structure's.
 #[inline(always)]
 pub(super) fn energy_run(
     [w2, omega, inv_gain]: [f64; 3],
     [u, v]: [f64; 2],
     cf: f64,
-    [peak_u, peak_a]: [f64; 2],
+    [peak_u, peak_a, lo, hi]: [f64; 4],
 ) -> [f64; 2] {
-    let lim = (omega * peak_u).min((peak_a - cf.abs()) * inv_gain) * (1.0 - 1e-9);
+    let a_room = (peak_a - cf.abs()).min(cf - lo).min(hi - cf);
+    let lim = (omega * peak_u).min(a_room * inv_gain) * (1.0 - 1e-9);
     let r = (v * v + w2 * (u * u)).sqrt();
     [lim - r * (1.0 + 1e-9), 1e-12 * lim.abs()]
 }

@@ -121,26 +121,27 @@ impl Simulator {
         pieces: &mut impl PieceSource,
     ) -> Option<(f64, Excitation)> {
         match self.dynamics.n_clusters {
-            // The bare structure's cluster (no band): its energy runs.
+            // The structure's cluster alone (no block, or all stuck): its energy runs.
             1 if !AG && self.dynamics.stick_band.is_none() => {
-                self.sweep_clusters::<1, AG, true>(piece, pieces)
+                self.sweep_clusters::<1, AG, 1>(piece, pieces)
             }
-            1 => self.sweep_clusters::<1, AG, false>(piece, pieces),
-            2 => self.sweep_clusters::<2, AG, false>(piece, pieces),
-            3 => self.sweep_clusters::<3, AG, false>(piece, pieces),
-            4 => self.sweep_clusters::<4, AG, false>(piece, pieces),
-            5 => self.sweep_clusters::<5, AG, false>(piece, pieces),
-            6 => self.sweep_clusters::<6, AG, false>(piece, pieces),
-            7 => self.sweep_clusters::<7, AG, false>(piece, pieces),
-            8 => self.sweep_clusters::<8, AG, false>(piece, pieces),
-            _ => self.sweep_clusters::<MAX_BODIES, AG, false>(piece, pieces),
+            1 if !AG => self.sweep_clusters::<1, AG, 2>(piece, pieces),
+            1 => self.sweep_clusters::<1, AG, 0>(piece, pieces),
+            2 => self.sweep_clusters::<2, AG, 0>(piece, pieces),
+            3 => self.sweep_clusters::<3, AG, 0>(piece, pieces),
+            4 => self.sweep_clusters::<4, AG, 0>(piece, pieces),
+            5 => self.sweep_clusters::<5, AG, 0>(piece, pieces),
+            6 => self.sweep_clusters::<6, AG, 0>(piece, pieces),
+            7 => self.sweep_clusters::<7, AG, 0>(piece, pieces),
+            8 => self.sweep_clusters::<8, AG, 0>(piece, pieces),
+            _ => self.sweep_clusters::<MAX_BODIES, AG, 0>(piece, pieces),
         }
     }
 
-    /// [`Simulator::sweep`] in a mode with `NC` clusters (cluster 0 the
-    /// structure's; moving interface m between clusters m and m + 1), with
-    /// the input rule `Dynamics::input_rule::<AG>` (`AG`: a prescribed
-    /// support).
+    /// [`Simulator::sweep`] in a mode with `NC` clusters (cluster 0 the structure's; moving
+    /// interface m between clusters m and m + 1), with the input rule `Dynamics::input_rule::<AG>`
+    /// (`AG`: a prescribed support); `RUNS` 1 or 2: the structure's cluster alone, in energy runs
+    /// (2: in a stick band).
     ///
     /// The clusters above the structure's have constant absolute
     /// accelerations `A_c` in the mode: a guard between two of them is
@@ -148,20 +149,17 @@ impl Simulator {
     /// up to its zero, found once per run. A slip whose guard holds keeps
     /// its direction: its peak is at an end of the run.
     #[inline(never)]
-    fn sweep_clusters<const NC: usize, const AG: bool, const RUNS: bool>(
+    fn sweep_clusters<const NC: usize, const AG: bool, const RUNS: u8>(
         &mut self,
         piece: &mut Piece,
         pieces: &mut impl PieceSource,
     ) -> Option<(f64, Excitation)> {
         let h_max = self.h_max;
         let (sys, d, maps) = (&self.sys, &self.dynamics, &mut self.maps);
-        debug_assert_eq!(d.n_clusters, NC);
-        debug_assert!(!RUNS || (NC == 1 && !AG && d.stick_band.is_none()));
+        debug_assert!(d.n_clusters == NC && (RUNS == 0 || (NC == 1 && !AG)));
         // Constants of the mode.
-        let (has_band, (band_lo, band_hi)) = match d.stick_band {
-            Some(band) => (true, band),
-            None => (false, (0.0, 0.0)),
-        };
+        let has_band = RUNS != 1 && d.stick_band.is_some();
+        let band: [f64; 2] = d.stick_band.unwrap_or((-f64::MAX, f64::MAX)).into();
         let slip_sign: [f64; NC] = std::array::from_fn(|m| d.slip_sign[m]);
         let iface: [usize; NC] = std::array::from_fn(|m| {
             if NC > 1 {
@@ -175,7 +173,6 @@ impl Simulator {
         debug_assert!(
             d.prescribed || load_accel.to_bits() == (d.slip_load[0] * inv_mass).to_bits()
         );
-        let prescribed = AG;
         debug_assert_eq!(AG, sys.prescribed());
         let rule = d.input_rule::<AG>();
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
@@ -251,8 +248,7 @@ impl Simulator {
                     };
                     // A jump of Fext, or a bad value: the piece is begun anew;
                     // on a prescribed support a jump of ag too, or any Fext.
-                    let on_support =
-                        prescribed && (is_jump(exc.ag, inp.ag) || exc.fext_rate != 0.0);
+                    let on_support = AG && (is_jump(exc.ag, inp.ag) || exc.fext_rate != 0.0);
                     if is_jump(exc.fext, inp.fext) || exc.check(t0, t_end).is_err() || on_support {
                         pending = Some((t_end, exc));
                         break;
@@ -280,16 +276,17 @@ impl Simulator {
                     continue;
                 }
             }
-            // The bare structure: the substeps its energy proves at once (`proofs::energy_run`)
+            // The structure's cluster alone: the substeps its energy proves at once (`energy_run`)
             // through the pieces the source promised (Fext constant), each paying its `∫|p|`
-            // from the budget; where that is spent, the quick tests of the peaks, a new budget.
-            if RUNS && wait > 0 {
+            // from the budget; where that is spent, the quick tests (peaks, band), a new budget.
+            if RUNS > 0 && wait > 0 {
                 wait -= 1;
-            } else if RUNS && lean[0] < lean[1] && inp.fext_rate == 0.0 {
+            } else if RUNS > 0 && lean[0] < lean[1] && inp.fext_rate == 0.0 {
                 let cf = load_accel + rule.accel(inp.ag, inp.fext);
                 let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
                 let peaks = [peak_u0, peak_a0];
-                let [mut budget, slack] = energy_run(rates, [u0, vel[0]], cf, peaks);
+                let limits = [peak_u0, peak_a0, band[0], band[1]];
+                let [mut budget, slack] = energy_run(rates, [u0, vel[0]], cf, limits);
                 // In copies the loop keeps in registers.
                 let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
                 let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
@@ -305,12 +302,14 @@ impl Simulator {
                         budget -= cost + slack;
                     } else {
                         let ends = [u, u1, cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
-                        let sag = 0.125 * hs * hs * map.sup_v_abs(3, &z.map(f64::abs));
-                        let [u_ok, a_ok] = peaks_quick(map, ends, sag, peaks);
-                        if !(u_ok && a_ok) {
+                        let s3 = map.sup_v_abs(3, &z.map(f64::abs));
+                        let [u_ok, a_ok] = peaks_quick(map, ends, 0.125 * hs * hs * s3, peaks);
+                        // The band's quick test (NaN rates): the general loop decides the rest.
+                        let out = |a| !in_band_proved(a, || [f64::NAN; 2], hs, s3, band);
+                        if !(u_ok && a_ok) || has_band && out([ends[2], ends[3]]) {
                             break;
                         }
-                        budget = energy_run(rates, [u1, v1], cf, peaks)[0];
+                        budget = energy_run(rates, [u1, v1], cf, limits)[0];
                     }
                     t = if c.i == c.n { c.t_end } else { t + hs };
                     (u, v) = (u1, v1);
@@ -356,7 +355,7 @@ impl Simulator {
                     fext_rate_m - w2 * v1 - cm * (a1 - ag1),
                 ]
             };
-            if has_band && !in_band_proved(ends, jerks, hs, s3, [band_lo, band_hi]) {
+            if has_band && !in_band_proved(ends, jerks, hs, s3, band) {
                 break;
             }
             // Upper clusters: exact polynomials; the ground's terms are
@@ -373,9 +372,10 @@ impl Simulator {
                 // The structure's slip guard; |g''| <= sup|v0''| + |ag'|, at
                 // most `two_over_three` sup|v0'''| + |ag'|.
                 let (g0, g1) = (sign0 * (vel[1] - vel[0]), sign0 * (v_end[1] - v1));
-                let rates = || [sign0 * (accel_c[1] - a_abs), sign0 * (accel_c[1] - a1)];
+                let d = |a: f64| sign0 * (accel_c[1] - a);
+                let rates = || [d(a_abs), d(a1), -sign0 * jerks()[0]];
                 let ag_rate = inp.ag_rate.abs();
-                let coarse = map.two_over_three * s3 + ag_rate;
+                let coarse = [map.two_over_three * s3 + ag_rate, s3];
                 let bound = || map.sup_v_abs(2, &z_abs) + ag_rate;
                 if !slip_guard_proved([g0, g1], rates, hs, coarse, bound) {
                     break;
