@@ -389,7 +389,7 @@ fn the_ambiguity_count_does_not_flip_with_rounding() {
     // tolerance. Expected: every shared record and the same record scaled by
     // (1 + 2^-52) give the same nAmbiguous, on the tall stack with static
     // above kinetic friction and on the paper's two blocks. (Before the
-    // fix, 9 of the 20 records flipped on the tall stack.)
+    // fix, 10 of the 20 shared records flipped on the tall stack.)
     use stacked_live_load::{ground::record, GroundMotion, Settings, Simulator};
     let dir = common::shared_record("");
     let mut names: Vec<_> = std::fs::read_dir(&dir)
@@ -398,7 +398,7 @@ fn the_ambiguity_count_does_not_flip_with_rounding() {
         .filter(|n| n.to_lowercase().ends_with(".at2"))
         .collect();
     names.sort();
-    assert_eq!(names.len(), 20);
+    assert!(!names.is_empty(), "no records in {}", dir.display());
     let count = |p: &Params, gm: &GroundMotion| {
         let mut sim = Simulator::new(p, &Settings::default()).unwrap();
         record::run(&mut sim, gm, 1.0).unwrap();
