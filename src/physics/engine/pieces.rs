@@ -170,13 +170,13 @@ impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for CheckedPieces<I> {
             return None;
         }
         let (t_end, exc) = self.pieces.next()?;
-        // As long as the last up to rounding, Fext held, every value
-        // finite, and where it matters `ag` without a jump.
+        // As long as the last up to rounding, Fext held (bit for bit: integer
+        // compares), every value finite (`sum * 0` is 0 then, else NaN, which
+        // fails the length's test), and where it matters `ag` without a jump.
         let sum = exc.ag + exc.ag_rate + t_end;
-        if exc.fext == self.fext
-            && exc.fext_rate == 0.0
-            && finite_terms(sum)
-            && continues_as_long(self.end, t_end, self.length)
+        if exc.fext_rate.to_bits() == 0
+            && exc.fext.to_bits() == self.fext.to_bits()
+            && continues_as_long(self.end, t_end + sum * 0.0, self.length)
             && !(self.ag_continuous && is_jump(exc.ag, self.ag_end))
         {
             if self.ag_continuous {
