@@ -110,8 +110,8 @@ pub(super) fn slip_guard_proved(
         let bound = bound();
         clear(bound) || {
             let [d0, d1, c0] = rates();
-            // A slip just begun (g0 near 0): g >= g0 + τ (d0 + min(0, c0 h/2) - s3 h²/6).
-            (g0 >= 0.0 && d0 + (0.5 * c0 * h).min(0.0) > s3 * h * h / 6.0)
+            // A slip just begun (g0 near 0, g1 > 0): g >= g0 + τ (d0 + min(0, c0 h/2) - s3 h²/6).
+            (g0 >= 0.0 && g1 > 0.0 && d0 + (0.5 * c0 * h).min(0.0) > s3 * h * h / 6.0)
                 || stays_positive([g0, d0, g1, d1], h, bound)
         }
     }
