@@ -41,9 +41,8 @@ use crate::physics::mode::{Guard, Moving};
 #[inline(always)]
 fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly; 2]) -> [f64; 3] {
     let [u, v] = uv;
-    // The forcing's part `[p, p']` is linear in time: after two terms its
-    // entries are `f · 0.0 = +0.0` (`f > 0`), left out of the rest (the
-    // same values: `0.0 - w2 u` is computed as before).
+    // The forcing's part `[p, p']` is linear in time: after two terms its entries are
+    // `f · 0.0 = +0.0` (`f > 0`), left out of the rest (`0.0 - w2 u`: the same values).
     let [mut y0, mut y1, p, p_rate] = z;
     (u.c[0], v.c[0]) = (y0, y1);
     let f = h * INV[0];
@@ -56,11 +55,8 @@ fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly
     (u.c[2], v.c[2]) = (y0, y1);
     let heads = [heads[0] + y0.abs(), heads[1] + y1.abs()];
     let mut tails = [0.0, 0.0];
-    let terms = u.c[3..=deg]
-        .iter_mut()
-        .zip(&mut v.c[3..=deg])
-        .zip(&INV[2..deg]);
-    for ((uk, vk), inv) in terms {
+    let terms = u.c[3..=deg].iter_mut().zip(&mut v.c[3..=deg]);
+    for ((uk, vk), inv) in terms.zip(&INV[2..deg]) {
         let f = h * inv;
         [y0, y1] = [f * y1, f * (0.0 - w2 * y0 - cm * y1)];
         (*uk, *vk) = (y0, y1);
@@ -87,23 +83,37 @@ pub(super) fn raise_substep_peaks(
     let (mut u, mut v) = (Poly::default(), Poly::default());
     taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
-    // y = ku u + kv v + c0 + c1 τ (u, or A), y' and y'' at τ from the state.
+    // y = ku u + kv v + c0 + c1 τ (u, or A), y', y'' and y''' at τ from the state.
     let y_at = |[ku, kv, c0, c1]: [f64; 4], t: f64, [u, v]: [f64; 2]| {
         let a = z[2] + z[3] * t - w2 * u - cm * v;
         let (j, y) = (z[3] - w2 * v - cm * a, ku * u + kv * v + c0 + c1 * t);
-        [y, c1 + ku * v + kv * a, ku * a + kv * j]
+        let (d, e) = (c1 + ku * v + kv * a, ku * a + kv * j);
+        [y, d, e, ku * j - kv * (w2 * a + cm * j)]
     };
     // The usual case first (else None): y' changes sign and |y''| >= m > 0
     // (its ends less h²/8 sup|y''''|), one zero; Newton's steps from the
-    // inverse cubic through the ends of y', y'' until |y'| <= m tol h.
+    // inverse quintic through the ends of y', y'', y''' until |y'| <= m tol h.
     let fast = |peak: &mut f64, k: [f64; 4], fourth: f64, y_end: f64| {
-        let ([y0, d0, e0], [_, d1, e1]) = (y_at(k, 0.0, [z[0], z[1]]), y_at(k, h, [u_end, v_end]));
+        let ([y0, d0, e0, f0], [_, d1, e1, f1]) =
+            (y_at(k, 0.0, [z[0], z[1]]), y_at(k, h, [u_end, v_end]));
         let m = e0.abs().min(e1.abs()) - 0.125 * h * h * fourth;
         (d0 * d1 < 0.0 && e0 * e1 > 0.0 && m > 0.0).then_some(())?;
-        let (x, dd) = (d0 / (d0 - d1), d1 - d0);
-        let mut t = h * x * x * (3.0 - 2.0 * x) + dd * x * (1.0 - x) * ((1.0 - x) / e0 - x / e1);
+        let (x, dd, g0, g1, inv_h) = (d0 / (d0 - d1), d1 - d0, 1.0 / e0, 1.0 / e1, 1.0 / h);
+        let (x1, x2) = (1.0 - x, x * x);
+        let mut t = h * x2 * x * (10.0 - 15.0 * x + 6.0 * x2)
+            + dd * x * x1 * (x1 * x1 * (1.0 + 3.0 * x) * g0 - x2 * (4.0 - 3.0 * x) * g1)
+            - 0.5 * dd * dd * x2 * x1 * x1 * (x1 * f0 * g0 * g0 * g0 + x * f1 * g1 * g1 * g1);
         for _ in 0..4 {
-            let [y, d, e] = y_at(k, t, [u.eval(t / h), v.eval(t / h)]);
+            // Horner's rule in s² on the even and odd terms (shorter chains).
+            let (s, s2) = (t * inv_h, (t * inv_h) * (t * inv_h));
+            let at = |p: &Poly| {
+                let pairs = p.c[..deg + 1].chunks(2).rev();
+                let [e, o] = pairs.fold([0.0, 0.0], |[e, o], c| {
+                    [e * s2 + c[0], o * s2 + c.get(1).unwrap_or(&0.0)]
+                });
+                e + s * o
+            };
+            let [y, d, e, _] = y_at(k, t, [at(&u), at(&v)]);
             if d.abs() <= m * tol * h && (0.0..=h).contains(&t) {
                 *peak = peak.max(y0.abs()).max(y_end.abs()).max(y.abs());
                 return Some(());
@@ -112,7 +122,6 @@ pub(super) fn raise_substep_peaks(
         }
         None
     };
-    // (The driver's bounds have failed: the search at once.)
     if let Some(peak) = peak_u {
         if fast(peak, [1.0, 0.0, 0.0, 0.0], fourth[0], u_end).is_none() {
             raise_peak_inside(peak, &u, Some(&v), u_end, 1.0, tol)?;
@@ -177,13 +186,8 @@ impl Flow {
         let q0 = d.input_accel(ag0, fext0) - ag0;
         let p0 = d.load_accel0 + q0;
         let p1 = d.input_accel(exc.ag_rate, exc.fext_rate) - exc.ag_rate;
-        [self.u_spread, self.v_spread, self.v_tail] = taylor_uv(
-            [sim.u[0], sim.v[0], p0, p1],
-            h,
-            [w2, cm],
-            deg,
-            [&mut self.u, &mut self.v],
-        );
+        let (z, uv) = ([sim.u[0], sim.v[0], p0, p1], [&mut self.u, &mut self.v]);
+        [self.u_spread, self.v_spread, self.v_tail] = taylor_uv(z, h, [w2, cm], deg, uv);
         self.accel_linear = [p0 + ag0, p1 + exc.ag_rate];
         self.accel_start = p0 + ag0 - w2 * sim.u[0] - cm * sim.v[0];
         self.accel_spread_bound =

@@ -507,11 +507,8 @@ mod tests {
             assert!((map.u[k] - u[k]).abs() <= 4e-16 * u[k].abs(), "u[{k}]");
             assert!((map.v[k] - v[k]).abs() <= 4e-16 * v[k].abs(), "v[{k}]");
         }
-        let all = map
-            .int_u
-            .iter()
-            .chain(&map.quad)
-            .chain(map.bound.iter().flatten());
+        let bound = map.bound.iter().flatten();
+        let all = map.int_u.iter().chain(&map.quad).chain(bound);
         assert!(all.copied().all(f64::is_finite));
         assert_eq!((map.w2, map.cm, map.c), (0.0, 0.0, 0.0));
         assert_eq!((map.one_over_three, map.five_over_three), (0.0, 0.0));
