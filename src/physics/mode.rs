@@ -43,6 +43,11 @@ impl Contact {
         const SIGN: [f64; 4] = [0.0, 1.0, -1.0, 0.0];
         SIGN[self as usize]
     }
+
+    /// Slipping forward, or backward (`backward`: the rule's bit 1).
+    pub fn slip(backward: bool) -> Contact {
+        [Contact::SlipForward, Contact::SlipBackward][usize::from(backward)]
+    }
 }
 
 /// The contact state of every interface; index j = 1..=n (index 0 unused).
@@ -69,6 +74,11 @@ impl Mode {
     /// Whether interface j is stuck.
     pub fn is_stuck(&self, j: usize) -> bool {
         self.contact[j] == Contact::Stuck
+    }
+
+    /// The stuck interfaces (bit j).
+    pub fn stuck_mask(&self) -> u32 {
+        (1..self.n + 1).fold(0, |m, j| m | u32::from(self.is_stuck(j)) << j)
     }
 }
 
@@ -801,7 +811,7 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             (j, x) = if f.abs() > x.abs() { (i, f) } else { (j, x) };
         }
         (j > 0).then_some(())?;
-        mode.contact[j] = [Contact::SlipForward, Contact::SlipBackward][usize::from(x > 0.0)];
+        mode.contact[j] = Contact::slip(x > 0.0);
     }
     None
 }
@@ -848,11 +858,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
         return None;
     }
     let mut stuck = req.mode;
-    // One pass over the interfaces of `zero`, from the bottom.
-    let mut rest = zero;
-    while rest != 0 {
-        let j = rest.trailing_zeros() as usize;
-        rest &= rest - 1;
+    for j in (1..sys.n + 1).filter(|&j| zero & (1 << j) != 0) {
         stuck.contact[j] = Contact::Stuck;
     }
     let others = zero & !breaking;
@@ -877,8 +883,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
                         let (mut mode, mut rest, mut bits) = (stuck, slips, code);
                         while rest != 0 {
                             let j = rest.trailing_zeros() as usize;
-                            mode.contact[j] =
-                                [Contact::SlipForward, Contact::SlipBackward][(bits & 1) as usize];
+                            mode.contact[j] = Contact::slip(bits & 1 == 1);
                             (rest, bits) = (rest & (rest - 1), bits >> 1);
                         }
                         tries += 1;
@@ -910,8 +915,8 @@ fn ambiguity(sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
         return (false, 0);
     }
     let (zero, load0, mut stuck) = (req.zero & !free_mask(sys), req.load0, *mode);
-    let slipping = (1..sys.n + 1).fold(0, |m, j| m | u32::from(!mode.is_stuck(j)) << j);
-    let (others, slips) = (zero & !req.must_break, zero & req.must_break & slipping);
+    let others = zero & !req.must_break;
+    let slips = zero & req.must_break & !mode.stuck_mask();
     if slips.count_ones() < 2 && only_consistent(sys, mode, req.zero, load0, others) {
         if slips == 0 {
             return (false, 0);
@@ -929,8 +934,7 @@ fn ambiguity(sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
         let force = stuck_force_up(sys, mode, load0, j, &mut last);
         if force.abs() > sys.muk[j] * sys.normal[j] {
             let mut rival = *mode;
-            rival.contact[j] =
-                [Contact::SlipForward, Contact::SlipBackward][usize::from(force > 0.0)];
+            rival.contact[j] = Contact::slip(force > 0.0);
             tries += 1;
             if consistent(sys, &rival, zero, load0) && !req.keeps_breaking(sys, &rival) {
                 return (true, tries);

@@ -23,19 +23,13 @@ impl Simulator {
         (2u32 << self.sys.n) - 2
     }
 
-    pub(super) fn stuck_mask(&self) -> u32 {
-        (1..self.sys.n + 1)
-            .filter(|&j| self.mode.is_stuck(j))
-            .fold(0, |m, j| m | (1 << j))
-    }
-
     /// Re-resolves the mode at the current state; counts a switch if it changed.
     pub(super) fn resolve_mode(&mut self, must_break: u32) {
         let req = ResolveRequest {
             mode: self.mode,
             zero: self.zero_mask(),
             must_break,
-            was_stuck: self.stuck_mask(),
+            was_stuck: self.mode.stuck_mask(),
             load0: self.load0(),
         };
         let res = mode::resolve(&self.sys, &req);
