@@ -129,15 +129,20 @@ pub(super) fn raise_substep_peaks(
     }
     if let Some(peak) = peak_a {
         if fast(peak, [-w2, -cm, cf, cf_rate], fourth[1], a_end).is_none() {
-            let a = &mut u; // u done with: the acceleration in its place
-            for (ak, vk) in a.c[..=deg].iter_mut().zip(&v.c) {
-                *ak = -w2 * *ak - cm * vk;
-            }
-            (a.c[0], a.c[1]) = (a.c[0] + cf, a.c[1] + cf_rate * h);
-            raise_peak_inside(peak, a, None, a_end, 1.0, tol)?;
+            accel_in_place(&mut u, &v, [w2, cm], [cf, cf_rate * h]); // u done with
+            raise_peak_inside(peak, &u, None, a_end, 1.0, tol)?;
         }
     }
     Ok(())
+}
+
+/// The absolute acceleration `c0 + c1 s - w2 u - cm v` in place of `u` (the
+/// equation of motion on the Taylor polynomials, `c1` per stretch).
+fn accel_in_place(u: &mut Poly, v: &Poly, [w2, cm]: [f64; 2], [c0, c1]: [f64; 2]) {
+    for (ak, vk) in u.c[..=u.deg].iter_mut().zip(&v.c) {
+        *ak = -w2 * *ak - cm * vk;
+    }
+    (u.c[0], u.c[1]) = (u.c[0] + c0, u.c[1] + c1);
 }
 
 /// The structure's cluster over the rest of a substep, of length `h`, from
@@ -201,16 +206,9 @@ impl Flow {
     /// its spread.
     fn accel(&mut self) -> (&Poly, f64) {
         if !self.accel_built {
-            // (Coefficients past the degree are never read: not zeroed.)
-            let c = &mut self.accel_poly.c;
-            let (u, v) = (self.u.coefs(), self.v.coefs());
-            for ((a, uk), vk) in c.iter_mut().zip(u).zip(v) {
-                *a = -self.w2 * uk - self.cm * vk;
-            }
-            let [a0, a1] = self.accel_linear;
-            c[0] += a0;
-            c[1] += a1 * self.h;
-            self.accel_poly.deg = self.u.deg;
+            let ([a0, a1], h, w2, cm) = (self.accel_linear, self.h, self.w2, self.cm);
+            self.accel_poly = self.u;
+            accel_in_place(&mut self.accel_poly, &self.v, [w2, cm], [a0, a1 * h]);
             self.accel_spread = self.accel_poly.spread(1.0);
             self.accel_built = true;
         }
@@ -590,8 +588,8 @@ impl Simulator {
             let slip0 = self.u[j] - self.u[j - 1];
             let slip1 = slip0 + du[hi] - du[lo];
             e_friction[j] -= d.slip_force[j] * (du[hi] - du[lo]);
-            // A slip whose guard (its rate, signed) was searched keeps its
-            // direction over the stretch: it peaks at an end.
+            // A slip whose guard (its rate, signed) is watched (not muted)
+            // keeps its direction over the stretch: it peaks at an end.
             let watched = d.changing_guards & !muted & (1 << j) != 0;
             if watched && self.mode.contact[j] != Contact::Free {
                 peak_slip[j] = peak_slip[j].max(slip0.abs()).max(slip1.abs());

@@ -170,8 +170,8 @@ impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for CheckedPieces<I> {
             return None;
         }
         let (t_end, exc) = self.pieces.next()?;
-        // As long as the last up to rounding, Fext held (bit for bit: integer
-        // compares), every value finite (`sum * 0` is 0 then, else NaN, which
+        // As long as the last up to rounding, Fext held (bit for bit; a -0.0
+        // goes to `next_piece`'s full check), every value finite (`sum * 0` is 0 then, else NaN, which
         // fails the length's test), and where it matters `ag` without a jump.
         let sum = exc.ag + exc.ag_rate + t_end;
         if exc.fext_rate.to_bits() == 0
