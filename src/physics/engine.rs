@@ -328,10 +328,10 @@ impl Simulator {
         self.advance_source_from(Some((t_end, *exc)), Plain(std::iter::empty()), law_changed)
     }
 
-    /// Advances through consecutive linear pieces, each given by its end
-    /// time and its excitation (values at its start), exactly as `advance`
-    /// on each in turn; runs of switch-free steps go on across the pieces'
-    /// ends on the fast path.
+    /// Advances through consecutive linear pieces, each given by its end time and its
+    /// excitation (values at its start): `advance` on the first, then
+    /// [`Simulator::advance_keeping_reference`] on each (the same as `advance` on each up to
+    /// rounding, except on a prescribed support with a mobility: its law keeps one reference).
     pub fn advance_pieces(
         &mut self,
         pieces: impl IntoIterator<Item = (f64, Excitation)>,
