@@ -381,12 +381,8 @@ impl MapCache {
             let inv_mass = 1.0 / sys.mass[0];
             degree(h, sys.k * inv_mass, sys.c * inv_mass)
         };
-        let range = if deg == last {
-            [lo.min(h), hi.max(h)]
-        } else {
-            [h, h]
-        };
-        self.last_degree = (range, deg);
+        let [lo, hi] = if deg == last { [lo, hi] } else { [h, h] };
+        self.last_degree = ([lo.min(h), hi.max(h)], deg);
         deg
     }
 }
