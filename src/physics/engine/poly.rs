@@ -353,6 +353,7 @@ pub(super) const INV: [f64; N_COEF + 1] = {
 
 /// `[u(s), v(s), ∫_0^s u(σ) dσ]` of two polynomials of one degree, in one
 /// pass (each Horner's sum as alone).
+#[inline(always)]
 pub(super) fn values_and_integral(u: &Poly, v: &Poly, s: f64) -> [f64; 3] {
     let (mut yu, mut yv, mut total) = (0.0, 0.0, 0.0);
     let terms = u.coefs().iter().zip(v.coefs()).zip(&INV).rev();
