@@ -167,7 +167,8 @@ pub(super) fn first_zero(
         }
         let b = if a + width >= e { e } else { a + width };
         let l = b - a;
-        let (gb, db) = g.eval_d(b);
+        // (At the stretch's end, `b = 1`: Horner's products by 1 folded away.)
+        let (gb, db) = if b < 1.0 { g.eval_d(b) } else { g.eval_d(1.0) };
         if gb > 0.0 {
             let m2 = *m2.get_or_insert_with(|| g.bound(2));
             if l <= tol || stays_positive([ga, da, gb, db], l, m2) {
