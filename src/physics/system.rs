@@ -34,7 +34,8 @@ pub struct System {
     pub muk: [f64; MAX_BODIES],
     /// Interfaces (bit j) with no static friction ([`System::is_free`]).
     pub free: u32,
-    /// Interfaces (bit j) whose static and kinetic friction differ.
+    /// Interfaces (bit j) whose static and kinetic friction differ: where a
+    /// switch's interfaces have none, one assignment at most is consistent.
     pub unequal: u32,
     /// Circular frequency of the bare structure, sqrt(k / mp); 0 on a
     /// prescribed support.

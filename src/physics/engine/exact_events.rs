@@ -537,7 +537,6 @@ impl Simulator {
         let d = &self.dynamics;
         let tau = if s >= 1.0 { flow.h } else { s * flow.h };
         let u0_start = self.u[0];
-        // To the stretch's end at `s = 1`: Horner's products by 1 folded away (the same sums).
         let values = |s| values_and_integral(&flow.u, &flow.v, s);
         let [u0, v0, int_u] = if s < 1.0 { values(s) } else { values(1.0) };
         let [a0, a1] = flow.accel_linear;
