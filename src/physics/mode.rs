@@ -557,7 +557,7 @@ pub fn stick_capacity(sys: &System, j: usize) -> f64 {
 /// interfaces in `zero` (bit j set: relative velocity exactly zero). Zero
 /// or negative means consistent.
 pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
-    let zero = zero & !free_mask(sys);
+    let zero = zero & !sys.free;
     let (mut worst, mut bottom, mut accel_below) = (f64::NEG_INFINITY, 0, 0.0);
     for end in 1..sys.n + 2 {
         if end <= sys.n && mode.is_stuck(end) {
@@ -600,17 +600,6 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
         bottom = end;
     }
     true
-}
-
-/// Whether mus = muk at every interface of `zero` (free ones: both 0): then
-/// one assignment at most is consistent, and none is ambiguous.
-fn equal_friction(sys: &System, zero: u32) -> bool {
-    (1..sys.n + 1).all(|j| zero & (1 << j) == 0 || sys.mus[j] == sys.muk[j])
-}
-
-/// Interfaces (bit j) that carry no friction.
-fn free_mask(sys: &System) -> u32 {
-    (1..sys.n + 1).fold(0, |m, j| m | u32::from(sys.is_free(j)) << j)
 }
 
 /// The contact law on one cluster of `mode`, bodies `bottom..end` (the
@@ -788,9 +777,9 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
 /// holds: the walk's assignment where [`only_consistent`] proves it unique.
 #[inline(never)]
 fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
-    let (zero, mut mode) = (req.zero & !free_mask(sys), req.mode);
+    let (zero, mut mode) = (req.zero & !sys.free, req.mode);
     let ifaces = || (1..sys.n + 1).filter(move |&j| zero & (1 << j) != 0);
-    equal_friction(sys, zero).then_some(())?;
+    (zero & sys.unequal == 0).then_some(())?;
     ifaces().for_each(|j| mode.contact[j] = Contact::Stuck);
     for tries in 1..zero.count_ones() + 2 {
         if (tries > 1 || zero & req.must_break != 0) && consistent(sys, &mode, zero, req.load0) {
@@ -829,7 +818,7 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     };
     // Several rivals (the rule decided); the bounded walk may have skipped
     // the others.
-    let equal = equal_friction(sys, req.zero);
+    let equal = req.zero & sys.unequal == 0;
     let (ambiguous, tries) = match search.count {
         0 | 1 => ambiguity(sys, req, &mode),
         _ => (!equal, 0),
@@ -852,7 +841,7 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
 /// not covered.
 #[inline(always)]
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) -> Option<Resolved> {
-    let zero = req.zero & !free_mask(sys);
+    let zero = req.zero & !sys.free;
     let breaking = zero & req.must_break;
     if breaking.count_ones() > 2 {
         return None;
@@ -911,10 +900,10 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
 /// force drives it past `muk N` if consistent; else the unbounded walk. (Inlined: sweep 7% slower.)
 #[inline(never)]
 fn ambiguity(sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
-    if equal_friction(sys, req.zero) {
+    if req.zero & sys.unequal == 0 {
         return (false, 0);
     }
-    let (zero, load0, mut stuck) = (req.zero & !free_mask(sys), req.load0, *mode);
+    let (zero, load0, mut stuck) = (req.zero & !sys.free, req.load0, *mode);
     let others = zero & !req.must_break;
     let slips = zero & req.must_break & !mode.stuck_mask();
     if slips.count_ones() < 2 && only_consistent(sys, mode, req.zero, load0, others) {
@@ -1345,7 +1334,7 @@ pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u
         k += 1;
     }
     let zero = &list[..k];
-    if equal_friction(sys, req.zero) {
+    if req.zero & sys.unequal == 0 {
         return (1, 0);
     }
     let mut count = 0;

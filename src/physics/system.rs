@@ -32,6 +32,11 @@ pub struct System {
     pub mus: [f64; MAX_BODIES],
     /// Kinetic friction coefficient of interface j.
     pub muk: [f64; MAX_BODIES],
+    /// Interfaces (bit j) with no static friction ([`System::is_free`]).
+    pub free: u32,
+    /// Interfaces (bit j) whose static and kinetic friction differ: where a
+    /// switch's interfaces have none, one assignment at most is consistent.
+    pub unequal: u32,
     /// Circular frequency of the bare structure, sqrt(k / mp); 0 on a
     /// prescribed support.
     pub omega_p: f64,
@@ -110,6 +115,8 @@ impl System {
             },
             g: p.g,
             normal,
+            free: (1..=n).fold(0, |m, j| m | u32::from(mus[j] == 0.0) << j),
+            unequal: (1..=n).fold(0, |m, j| m | u32::from(mus[j] != muk[j]) << j),
             mus,
             muk,
             omega_p,
@@ -122,7 +129,7 @@ impl System {
 
     /// An interface with no static friction transmits no force and never sticks.
     pub fn is_free(&self, j: usize) -> bool {
-        self.mus[j] == 0.0
+        self.free & (1 << j) != 0
     }
 
     /// Whether body 0 is a support whose acceleration is the input `ag`.

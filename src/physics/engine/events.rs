@@ -11,11 +11,9 @@ impl Simulator {
         // Half-open ranges on the event path: an inclusive range's
         // iterator tests an extra flag at every step.
         for j in 1..self.sys.n + 1 {
-            if !self.sys.is_free(j) && self.v[j] == self.v[j - 1] {
-                z |= 1 << j;
-            }
+            z |= u32::from(self.v[j] == self.v[j - 1]) << j;
         }
-        z
+        z & !self.sys.free
     }
 
     /// Every interface of the stack (bit j).

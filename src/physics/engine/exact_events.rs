@@ -537,7 +537,8 @@ impl Simulator {
         let d = &self.dynamics;
         let tau = if s >= 1.0 { flow.h } else { s * flow.h };
         let u0_start = self.u[0];
-        let [u0, v0, int_u] = values_and_integral(&flow.u, &flow.v, s);
+        let values = |s| values_and_integral(&flow.u, &flow.v, s);
+        let [u0, v0, int_u] = if s < 1.0 { values(s) } else { values(1.0) };
         let [a0, a1] = flow.accel_linear;
         let accel_end = a0 + a1 * tau - flow.w2 * u0 - flow.cm * v0;
 

@@ -290,9 +290,9 @@ pub(super) struct MapCache {
     next: usize,
     /// The map found last.
     last: usize,
-    /// The last stretch length asked of [`MapCache::stretch_degree`] (its
-    /// bits) and its degree: most substeps have the same length.
-    last_degree: Option<(u64, usize)>,
+    /// Stretch lengths `lo..=hi` asked of [`MapCache::stretch_degree`] with
+    /// one degree: every length between has it ([`degree`] grows with `h`).
+    last_degree: ([f64; 2], usize),
     /// Substeps' rows with their maps, a slot per hash of mass and length
     /// (bit for bit: a master's few, differing by the times' rounding), keyed
     /// `[!mass, h]`: a zeroed slot matches no mass (it would be a NaN).
@@ -372,12 +372,11 @@ impl MapCache {
 
     /// The degree of the event path's Taylor polynomials over a stretch of
     /// length `h`: [`degree`] at the bare structure's rates (the highest of
-    /// any mode), remembered for the last length asked.
+    /// any mode), remembered for a range of lengths.
     pub(super) fn stretch_degree(&mut self, sys: &System, h: f64) -> usize {
-        if let Some((bits, deg)) = self.last_degree {
-            if bits == h.to_bits() {
-                return deg;
-            }
+        let ([lo, hi], last) = self.last_degree;
+        if lo <= h && h <= hi {
+            return last;
         }
         let deg = if sys.prescribed() {
             degree(h, 0.0, 0.0)
@@ -385,7 +384,8 @@ impl MapCache {
             let inv_mass = 1.0 / sys.mass[0];
             degree(h, sys.k * inv_mass, sys.c * inv_mass)
         };
-        self.last_degree = Some((h.to_bits(), deg));
+        let [lo, hi] = if deg == last { [lo, hi] } else { [h, h] };
+        self.last_degree = ([lo.min(h), hi.max(h)], deg);
         deg
     }
 }

@@ -112,7 +112,7 @@ impl Poly {
         rest.iter().rev().fold(*top, |y, c| y * s + c)
     }
 
-    /// Value and derivative at `s`.
+    /// Value and derivative at `s` (inlined: at `s = 1` the products by 1 fold away).
     #[inline]
     pub(super) fn eval_d(&self, s: f64) -> (f64, f64) {
         let (top, rest) = self.c[..=self.deg].split_last().unwrap();
@@ -167,7 +167,7 @@ pub(super) fn first_zero(
         }
         let b = if a + width >= e { e } else { a + width };
         let l = b - a;
-        let (gb, db) = g.eval_d(b);
+        let (gb, db) = if b < 1.0 { g.eval_d(b) } else { g.eval_d(1.0) };
         if gb > 0.0 {
             let m2 = *m2.get_or_insert_with(|| g.bound(2));
             if l <= tol || stays_positive([ga, da, gb, db], l, m2) {
@@ -352,7 +352,8 @@ pub(super) const INV: [f64; N_COEF + 1] = {
 };
 
 /// `[u(s), v(s), ∫_0^s u(σ) dσ]` of two polynomials of one degree, in one
-/// pass (each Horner's sum as alone).
+/// pass (each Horner's sum as alone; inlined: at `s = 1` its products fold).
+#[inline(always)]
 pub(super) fn values_and_integral(u: &Poly, v: &Poly, s: f64) -> [f64; 3] {
     let (mut yu, mut yv, mut total) = (0.0, 0.0, 0.0);
     let terms = u.coefs().iter().zip(v.coefs()).zip(&INV).rev();
