@@ -1457,3 +1457,52 @@ fn a_drift_that_turns_back_inside_a_substep_raises_the_peak() {
         compare_on_support(&sim.outputs(), &exact, &format!("case {case}"));
     }
 }
+
+#[test]
+fn a_slip_on_a_drifting_support_that_grazes_zero_is_found_in_one_call() {
+    // From a review: before the fix above, the quick test of the slip guard
+    // on the support bounded |g''| by |ag'| alone, while a mobility makes it
+    // |g ag'| (g > 1 once the support has left its reference mode); pieces
+    // under one reference (one `advance_pieces` call) could then pass over
+    // a slip that comes to rest: 1 switch instead of 3 for kinks of `ag`
+    // at 0.1 s between 2.20 and 2.31 m/s². Expected: the reference with the
+    // first piece's reference mode kept (its peaks, state, energies and
+    // switch count), over kinks across that range.
+    let mut p = Params {
+        n_blocks: 1,
+        mp: 1.0,
+        support: Support::Prescribed,
+        ..Params::default()
+    };
+    (p.alpha[0], p.mus[0], p.muk[0]) = (1.0, 0.3, 0.3);
+    for x in [2.15, 2.21, 2.25, 2.3, 2.35] {
+        let points = [
+            (0.0, 0.0),
+            (0.05, -8.0),
+            (0.1, x),
+            (0.16, -8.0),
+            (0.2, -8.0),
+        ];
+        let pieces: Vec<InputPiece> = points
+            .windows(2)
+            .map(|w| InputPiece {
+                t_end: w[1].0,
+                ag: w[0].1,
+                ag_rate: (w[1].1 - w[0].1) / (w[1].0 - w[0].0),
+                fext: 0.0,
+                fext_rate: 0.0,
+            })
+            .collect();
+        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        sim.set_support_mobility(3.0).unwrap();
+        sim.advance_pieces(pieces.iter().map(|pc| (pc.t_end, excitation(pc))))
+            .unwrap();
+        let exact = Exact::new(&p)
+            .with_mobility(3.0)
+            .keeping_reference()
+            .run_pieces(0.0, &pieces, 64);
+        let label = format!("kink {x}");
+        compare_on_support(&sim.outputs(), &exact, &label);
+        assert_eq!(sim.stats().events as usize, exact.events, "{label}");
+    }
+}

@@ -131,6 +131,8 @@ pub struct Exact {
     /// On a prescribed support with a mobility: the reference mode, the
     /// mode when the inputs were last set (at every piece's start).
     ref_mode: std::cell::Cell<Mode>,
+    /// The first piece's reference mode kept for all (`keeping_reference`).
+    one_reference: bool,
 }
 
 impl Exact {
@@ -167,6 +169,7 @@ impl Exact {
         let sys = System::new(p).unwrap();
         Exact {
             ref_mode: std::cell::Cell::new(Mode::all_stuck(&sys)),
+            one_reference: false,
             sys,
             m,
             mass,
@@ -188,6 +191,14 @@ impl Exact {
     /// body 0 of mass `M_f` under `P`.
     pub fn with_mobility(mut self, mobility: f64) -> Exact {
         self.sys.mobility = mobility;
+        self
+    }
+
+    /// On a prescribed support, the first piece's mode stays the reference
+    /// of the support's law for every piece (the pieces of one
+    /// `advance_pieces` call, one communication step of a master).
+    pub fn keeping_reference(mut self) -> Exact {
+        self.one_reference = true;
         self
     }
 
@@ -417,7 +428,7 @@ impl Exact {
         // Relative displacement of each stuck pair, fixed when it stuck.
         let mut offsets = vec![0.0; m];
         let mut t_a = t_start;
-        for piece in pieces {
+        for (k, piece) in pieces.iter().enumerate() {
             // This piece runs from t_a (the previous one's end) to its end.
             let len = piece.t_end - t_a;
             let (a_a, slope) = (piece.ag, piece.ag_rate);
@@ -430,7 +441,7 @@ impl Exact {
             // A change of the law can move the support at once, as a jump
             // of ag does: an event too.
             let mut law_changed = false;
-            if self.prescribed {
+            if self.prescribed && (k == 0 || !self.one_reference) {
                 let (u0, v0) = (z[0], z[m]);
                 for i in 0..m {
                     let v = z[m + i] - v0;
