@@ -779,7 +779,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
 fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let (zero, mut mode) = (req.zero & !sys.free, req.mode);
     let ifaces = || (1..sys.n + 1).filter(move |&j| zero & (1 << j) != 0);
-    (zero & sys.unequal == 0).then_some(())?;
+    sys.equal_friction(zero).then_some(())?;
     ifaces().for_each(|j| mode.contact[j] = Contact::Stuck);
     for tries in 1..zero.count_ones() + 2 {
         if (tries > 1 || zero & req.must_break != 0) && consistent(sys, &mode, zero, req.load0) {
@@ -818,7 +818,7 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     };
     // Several rivals (the rule decided); the bounded walk may have skipped
     // the others.
-    let equal = req.zero & sys.unequal == 0;
+    let equal = sys.equal_friction(req.zero);
     let (ambiguous, tries) = match search.count {
         0 | 1 => ambiguity(sys, req, &mode),
         _ => (!equal, 0),
@@ -900,7 +900,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
 /// force drives it past `muk N` if consistent; else the unbounded walk. (Inlined: sweep 7% slower.)
 #[inline(never)]
 fn ambiguity(sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
-    if req.zero & sys.unequal == 0 {
+    if sys.equal_friction(req.zero) {
         return (false, 0);
     }
     let (zero, load0, mut stuck) = (req.zero & !sys.free, req.load0, *mode);
@@ -1334,7 +1334,7 @@ pub fn consistent_count_and_tries(sys: &System, req: &ResolveRequest) -> (u32, u
         k += 1;
     }
     let zero = &list[..k];
-    if req.zero & sys.unequal == 0 {
+    if sys.equal_friction(req.zero) {
         return (1, 0);
     }
     let mut count = 0;

@@ -34,9 +34,8 @@ pub struct System {
     pub muk: [f64; MAX_BODIES],
     /// Interfaces (bit j) with no static friction ([`System::is_free`]).
     pub free: u32,
-    /// Interfaces (bit j) whose static and kinetic friction differ: where a
-    /// switch's interfaces have none, one assignment at most is consistent.
-    pub unequal: u32,
+    /// Interfaces (bit j) whose static and kinetic friction differ.
+    unequal: u32,
     /// Circular frequency of the bare structure, sqrt(k / mp); 0 on a
     /// prescribed support.
     pub omega_p: f64,
@@ -125,6 +124,12 @@ impl System {
             ref_mass: 0.0,
             ref_load: 0.0,
         })
+    }
+
+    /// Whether μs = μk at every interface of `zero` (free ones: both 0): then
+    /// one assignment at most is consistent, and none is ambiguous.
+    pub fn equal_friction(&self, zero: u32) -> bool {
+        zero & self.unequal == 0
     }
 
     /// An interface with no static friction transmits no force and never sticks.

@@ -211,10 +211,9 @@ impl ExactMap {
                 *x *= scale;
             }
         }
-        // Every term of a structure's bound of v''' is positive, so the ratios
-        // below bound v', v'' and v^(5) by it. On a prescribed support v''' is 0
-        // while a mobility drives v' and v'': its bound is raised to theirs, term
-        // by term (still a bound), for the ratios to hold (0/0 is left out).
+        // The ratios below bound v', v'' and v^(5) by v''' where its bound has every term
+        // positive (a structure). On a prescribed support v''' is 0 while a mobility drives v'
+        // and v'': its bound is raised to theirs term by term (still a bound; 0/0 left out).
         if sys.prescribed() {
             bound[2] = std::array::from_fn(|i| bound[0][i].max(bound[1][i]));
         }
