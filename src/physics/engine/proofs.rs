@@ -162,24 +162,23 @@ pub(super) fn peaks_quick(map: &ExactMap, ends: [f64; 4], sag: f64, peaks: [f64;
     [u <= peaks[0], larger(ends[2], ends[3]) + sag <= peaks[1]]
 }
 
-/// A run of substeps of the structure's cluster alone (its forcing `p = cf - ag` per unit mass,
-/// `cf` constant) proved at once free of new peaks and in the stick band: `[budget, slack]`, each
-/// substep paying `h (|p(0)| + |p(h)|)/2 + slack`. With `r = sqrt(v² + w2 u²)`, `(r²/2)' = p v - cm
-/// v² <= |p| r`: `r` grows by `∫|p|` at most (the trapezoid bounds it, `|p|` convex on a substep),
-/// and `|u| <= r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the peaks and inside the band
-/// `[lo, hi]` (±f64::MAX without one). Margins (1e-9, 1e-12 a substep) cover the states' rounding.
-/// `[w2, ω, 1/sqrt(w2 + cm²)]`: the structure's.
+/// A substep of the structure's cluster alone (its forcing `p = cf - ag` per unit mass, `cf`
+/// constant) proved free of new peaks and in the stick band from its start `[u, v]` at once when
+/// it costs `h (|p(0)| + |p(h)|)/2` or less of the room returned. With `r = sqrt(v² + w2 u²)`,
+/// `(r²/2)' = p v - cm v² <= |p| r`: `r` grows by `∫|p|` at most (the trapezoid bounds it, `|p|`
+/// convex on a substep), and `|u| <= r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the
+/// peaks and inside the band `[lo, hi]` (±f64::MAX without one). Margins (1e-9) cover the
+/// rounding. `[w2, ω, 1/sqrt(w2 + cm²)]`: the structure's.
 #[inline(always)]
 pub(super) fn energy_run(
     [w2, omega, inv_gain]: [f64; 3],
     [u, v]: [f64; 2],
     cf: f64,
     [peak_u, peak_a, lo, hi]: [f64; 4],
-) -> [f64; 2] {
+) -> f64 {
     let a_room = (peak_a - cf.abs()).min(cf - lo).min(hi - cf);
     let lim = (omega * peak_u).min(a_room * inv_gain) * (1.0 - 1e-9);
-    let r = (v * v + w2 * (u * u)).sqrt();
-    [lim - r * (1.0 + 1e-9), 1e-12 * lim.abs()]
+    lim - (v * v + w2 * (u * u)).sqrt() * (1.0 + 1e-9)
 }
 
 /// Whether `g > 0` over `(0, h]` is proved from its ends (values `g0`, `g1`,
