@@ -176,8 +176,9 @@ pub(super) fn energy_run(
     cf: f64,
     [peak_u, peak_a, lo, hi]: [f64; 4],
 ) -> f64 {
-    let a_room = (peak_a - cf.abs()).min(cf - lo).min(hi - cf);
-    let lim = (omega * peak_u).min(a_room * inv_gain) * (1.0 - 1e-9);
+    let min = |a: f64, b: f64| if a < b { a } else { b }; // (f64::min's NaN rule: not needed)
+    let a_room = min(min(peak_a - cf.abs(), cf - lo), hi - cf);
+    let lim = min(omega * peak_u, a_room * inv_gain) * (1.0 - 1e-9);
     lim - (v * v + w2 * (u * u)).sqrt() * (1.0 + 1e-9)
 }
 
