@@ -47,7 +47,8 @@ pub(super) fn raise_peak_proved(
         }
         return true;
     }
-    cubic_below(*peak, [y0, d0, y1, d1], h, rest)
+    // The cubic's maximum is at least `ends`: above the peak, no bound can hold.
+    ends + rest <= *peak && cubic_below(*peak, [y0, d0, y1, d1], h, rest)
 }
 
 /// Whether the cubic through the ends plus `rest` stays at or below `peak`.
