@@ -289,9 +289,9 @@ impl Simulator {
                 // In copies the loop keeps in registers.
                 let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
                 let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
-                loop {
+                let unproved = loop {
                     if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t) {
-                        break;
+                        break false;
                     }
                     let hs = c.h;
                     let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
@@ -304,7 +304,7 @@ impl Simulator {
                         // The band's quick test (NaN rates): the general loop decides the rest.
                         let out = |a| !in_band_proved(a, || [f64::NAN; 2], hs, s3, band);
                         if !(u_ok && a_ok) || has_band && out([ends[2], ends[3]]) {
-                            break;
+                            break true;
                         }
                     }
                     t = if c.i == c.n { c.t_end } else { t + hs };
@@ -312,11 +312,14 @@ impl Simulator {
                     s.add(&z);
                     i.ag += i.ag_rate * hs;
                     (c.i, n) = (c.i + 1, n + 1);
-                }
+                };
                 let before = taken;
                 (cur, inp, lean, sums, t0, u0, vel[0], taken) = (c, i, l, s, t, u, v, n);
                 if taken > before {
                     a_abs = cf - w2 * u0 - cm * vel[0];
+                }
+                // A substep the run could not prove: the general loop takes it and the next `cool`.
+                if taken > before && !unproved {
                     continue;
                 }
                 wait = cool;
