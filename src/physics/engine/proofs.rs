@@ -163,24 +163,24 @@ pub(super) fn peaks_quick(map: &ExactMap, ends: [f64; 4], sag: f64, peaks: [f64;
     [u <= peaks[0], larger(ends[2], ends[3]) + sag <= peaks[1]]
 }
 
-/// A substep of the structure's cluster alone (its forcing `p = cf - ag` per unit mass, `cf`
-/// constant) proved free of new peaks and in the stick band from its start `[u, v]` at once when
-/// it costs `h (|p(0)| + |p(h)|)/2` or less of the room returned. With `r = sqrt(v² + w2 u²)`,
-/// `(r²/2)' = p v - cm v² <= |p| r`: `r` grows by `∫|p|` at most (the trapezoid bounds it, `|p|`
-/// convex on a substep), and `|u| <= r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the
-/// peaks and inside the band `[lo, hi]` (±f64::MAX without one). Margins (1e-9) cover the
-/// rounding. `[w2, ω, 1/sqrt(w2 + cm²)]`: the structure's.
+/// Whether a substep of the structure's cluster alone (its forcing `p = cf - ag` per unit mass,
+/// `cf` constant) from `[u, v]` is proved free of new peaks and in the stick band by its energy,
+/// `cost` bounding `∫|p|` (`h (|p(0)| + |p(h)|)/2`: `|p|` is convex on a substep). With `r =
+/// sqrt(v² + w2 u²)`, `(r²/2)' = p v - cm v² <= |p| r`: `r` grows by `∫|p|` at most, and `|u| <=
+/// r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the peaks and inside the band `[lo, hi]`
+/// (±f64::MAX without one). Margins (1e-9) cover the rounding. `[w2, ω, 1/sqrt(w2 + cm²)]`: the
+/// structure's.
 #[inline(always)]
 pub(super) fn energy_run(
     [w2, omega, inv_gain]: [f64; 3],
     [u, v]: [f64; 2],
-    cf: f64,
+    [cf, cost]: [f64; 2],
     [peak_u, peak_a, lo, hi]: [f64; 4],
-) -> f64 {
+) -> bool {
     let min = |a: f64, b: f64| if a < b { a } else { b }; // (f64::min's NaN rule: not needed)
     let a_room = min(min(peak_a - cf.abs(), cf - lo), hi - cf);
     let lim = min(omega * peak_u, a_room * inv_gain) * (1.0 - 1e-9);
-    lim - (v * v + w2 * (u * u)).sqrt() * (1.0 + 1e-9)
+    cost <= lim - (v * v + w2 * (u * u)).sqrt() * (1.0 + 1e-9)
 }
 
 /// Whether `g > 0` over `(0, h]` is proved from its ends (values `g0`, `g1`,

@@ -297,7 +297,7 @@ impl Simulator {
                     let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
                     let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
                     let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
-                    if !(cost <= energy_run(rates, [u, v], cf, limits)) {
+                    if !energy_run(rates, [u, v], [cf, cost], limits) {
                         let ends = [u, u1, cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
                         let s3 = map.sup_v_abs(3, &z.map(f64::abs));
                         let [u_ok, a_ok] = peaks_quick(map, ends, 0.125 * hs * hs * s3, peaks);
