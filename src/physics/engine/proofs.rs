@@ -47,7 +47,8 @@ pub(super) fn raise_peak_proved(
         }
         return true;
     }
-    cubic_below(*peak, [y0, d0, y1, d1], h, rest)
+    // The cubic's maximum is at least `ends`: above the peak, no bound can hold.
+    ends + rest <= *peak && cubic_below(*peak, [y0, d0, y1, d1], h, rest)
 }
 
 /// Whether the cubic through the ends plus `rest` stays at or below `peak`.
@@ -162,24 +163,24 @@ pub(super) fn peaks_quick(map: &ExactMap, ends: [f64; 4], sag: f64, peaks: [f64;
     [u <= peaks[0], larger(ends[2], ends[3]) + sag <= peaks[1]]
 }
 
-/// A run of substeps of the structure's cluster alone (its forcing `p = cf - ag` per unit mass,
-/// `cf` constant) proved at once free of new peaks and in the stick band: `[budget, slack]`, each
-/// substep paying `h (|p(0)| + |p(h)|)/2 + slack`. With `r = sqrt(v² + w2 u²)`, `(r²/2)' = p v - cm
-/// v² <= |p| r`: `r` grows by `∫|p|` at most (the trapezoid bounds it, `|p|` convex on a substep),
-/// and `|u| <= r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the peaks and inside the band
-/// `[lo, hi]` (±f64::MAX without one). Margins (1e-9, 1e-12 a substep) cover the states' rounding.
-/// `[w2, ω, 1/sqrt(w2 + cm²)]`: the structure's.
+/// Whether a substep of the structure's cluster alone (its forcing `p = cf - ag` per unit mass,
+/// `cf` constant) from `[u, v]` is proved free of new peaks and in the stick band by its energy,
+/// `cost` bounding `∫|p|` (`h (|p(0)| + |p(h)|)/2`: `|p|` is convex on a substep). With `r =
+/// sqrt(v² + w2 u²)`, `(r²/2)' = p v - cm v² <= |p| r`: `r` grows by `∫|p|` at most, and `|u| <=
+/// r/ω`, `|A - cf| <= r sqrt(w2 + cm²)` must stay under the peaks and inside the band `[lo, hi]`
+/// (±f64::MAX without one). Margins (1e-9) cover the rounding. `[w2, ω, 1/sqrt(w2 + cm²)]`: the
+/// structure's.
 #[inline(always)]
 pub(super) fn energy_run(
     [w2, omega, inv_gain]: [f64; 3],
     [u, v]: [f64; 2],
-    cf: f64,
+    [cf, cost]: [f64; 2],
     [peak_u, peak_a, lo, hi]: [f64; 4],
-) -> [f64; 2] {
-    let a_room = (peak_a - cf.abs()).min(cf - lo).min(hi - cf);
-    let lim = (omega * peak_u).min(a_room * inv_gain) * (1.0 - 1e-9);
-    let r = (v * v + w2 * (u * u)).sqrt();
-    [lim - r * (1.0 + 1e-9), 1e-12 * lim.abs()]
+) -> bool {
+    let min = |a: f64, b: f64| if a < b { a } else { b }; // (f64::min's NaN rule: not needed)
+    let a_room = min(min(peak_a - cf.abs(), cf - lo), hi - cf);
+    let lim = min(omega * peak_u, a_room * inv_gain) * (1.0 - 1e-9);
+    cost <= lim - (v * v + w2 * (u * u)).sqrt() * (1.0 + 1e-9)
 }
 
 /// Whether `g > 0` over `(0, h]` is proved from its ends (values `g0`, `g1`,

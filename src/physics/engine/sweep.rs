@@ -277,8 +277,8 @@ impl Simulator {
                 }
             }
             // The structure's cluster alone: the substeps its energy proves at once (`energy_run`)
-            // through the pieces the source promised (Fext constant), each paying its `∫|p|`
-            // from the budget; where that is spent, the quick tests (peaks, band), a new budget.
+            // through the pieces the source promised (Fext constant); where it does not, the
+            // quick tests (peaks, band).
             if RUNS > 0 && wait > 0 {
                 wait -= 1;
             } else if RUNS > 0 && lean[0] < lean[1] && inp.fext_rate == 0.0 {
@@ -286,41 +286,40 @@ impl Simulator {
                 let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
                 let peaks = [peak_u0, peak_a0];
                 let limits = [peak_u0, peak_a0, band[0], band[1]];
-                let [mut budget, slack] = energy_run(rates, [u0, vel[0]], cf, limits);
                 // In copies the loop keeps in registers.
                 let (mut c, mut i, mut l, mut s) = (cur, inp, lean, sums);
                 let (mut t, mut u, mut v, mut n) = (t0, u0, vel[0], taken);
-                loop {
+                let unproved = loop {
                     if c.i > c.n && !continue_piece(pieces, &mut c, &mut i, &mut l, t) {
-                        break;
+                        break false;
                     }
                     let hs = c.h;
                     let z = [u, v, cf - i.ag, rate_m - i.ag_rate];
                     let cost = (0.5 + 1e-9) * hs * (z[2].abs() + (z[2] + hs * z[3]).abs());
                     let (u1, v1) = (dot(&row_u, &z), dot(&row_v, &z));
-                    if cost + slack <= budget {
-                        budget -= cost + slack;
-                    } else {
+                    if !energy_run(rates, [u, v], [cf, cost], limits) {
                         let ends = [u, u1, cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
                         let s3 = map.sup_v_abs(3, &z.map(f64::abs));
                         let [u_ok, a_ok] = peaks_quick(map, ends, 0.125 * hs * hs * s3, peaks);
                         // The band's quick test (NaN rates): the general loop decides the rest.
                         let out = |a| !in_band_proved(a, || [f64::NAN; 2], hs, s3, band);
                         if !(u_ok && a_ok) || has_band && out([ends[2], ends[3]]) {
-                            break;
+                            break true;
                         }
-                        budget = energy_run(rates, [u1, v1], cf, limits)[0];
                     }
                     t = if c.i == c.n { c.t_end } else { t + hs };
                     (u, v) = (u1, v1);
                     s.add(&z);
                     i.ag += i.ag_rate * hs;
                     (c.i, n) = (c.i + 1, n + 1);
-                }
+                };
                 let before = taken;
                 (cur, inp, lean, sums, t0, u0, vel[0], taken) = (c, i, l, s, t, u, v, n);
                 if taken > before {
                     a_abs = cf - w2 * u0 - cm * vel[0];
+                }
+                // A substep the run could not prove: the general loop takes it and the next `cool`.
+                if taken > before && !unproved {
                     continue;
                 }
                 wait = cool;
