@@ -237,12 +237,9 @@ impl Dynamics {
     /// interfaces.
     pub fn new(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics::clusters(sys, mode);
-        for j in 1..sys.n + 1 {
-            let constant = mode.is_stuck(j) && d.cluster_of[j] != 0;
-            if !sys.is_free(j) && !constant {
-                d.changing_guards |= 1 << j;
-            }
-        }
+        // Not free, and not a stick above the structure's cluster (its top, `top[0]`).
+        let constant = mode.stuck_mask() & !((2u32 << d.top[0]) - 1);
+        d.changing_guards = ((2u32 << sys.n) - 2) & !sys.free & !constant;
         for j in 1..sys.n + 1 {
             let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
             if hi != lo {
@@ -261,22 +258,15 @@ impl Dynamics {
                     cap: stick_capacity(sys, j),
                 }
             } else {
-                Guard::Slip {
-                    hi,
-                    lo,
-                    sign: mode.contact[j].slip_sign(),
-                }
+                let sign = mode.contact[j].slip_sign();
+                d.slip_sign[lo] = sign;
+                Guard::Slip { hi, lo, sign }
             };
             d.n_guards += 1;
         }
         let guards = &d.guards[..d.n_guards];
         if guards.iter().any(|g| matches!(g, Guard::Stuck { .. })) {
             d.stick_band = Some(safe_accel_band(guards));
-        }
-        for g in guards {
-            if let Guard::Slip { lo, sign, .. } = *g {
-                d.slip_sign[lo] = sign;
-            }
         }
         d
     }
