@@ -237,6 +237,19 @@ impl Dynamics {
     /// interfaces.
     pub fn new(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics::clusters(sys, mode);
+        d.add_guards(sys, mode);
+        d
+    }
+
+    /// Sets `self` to [`Dynamics::new`] of `mode`, built in place.
+    pub(crate) fn build(&mut self, sys: &System, mode: &Mode) {
+        *self = Dynamics::clusters(sys, mode);
+        self.add_guards(sys, mode);
+    }
+
+    /// The guards and moving interfaces of `mode` on its clusters.
+    fn add_guards(&mut self, sys: &System, mode: &Mode) {
+        let d = self;
         // Not free, and not a stick above the structure's cluster (its top, `top[0]`).
         let constant = mode.stuck_mask() & !((2u32 << d.top[0]) - 1);
         d.changing_guards = ((2u32 << sys.n) - 2) & !sys.free & !constant;
@@ -268,7 +281,6 @@ impl Dynamics {
         if guards.iter().any(|g| matches!(g, Guard::Stuck { .. })) {
             d.stick_band = Some(safe_accel_band(guards));
         }
-        d
     }
 
     /// The clusters, masses and forces of `mode` only, without its guards

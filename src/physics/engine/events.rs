@@ -328,7 +328,8 @@ impl DynamicsCache {
     #[cold]
     #[inline(never)]
     fn insert(&mut self, key: u32, sys: &System, mode: &Mode, out: &mut Dynamics) {
-        // Built where it is kept, then copied once.
+        // Built in `out`, then copied once.
+        out.build(sys, mode);
         let i = if self.keys.len() < DYNAMICS_CACHE_SIZE {
             if self.keys.is_empty() {
                 // Room for every entry at once: a growing vector would copy
@@ -337,16 +338,14 @@ impl DynamicsCache {
                 self.dynamics.reserve_exact(DYNAMICS_CACHE_SIZE);
             }
             self.keys.push(key);
-            self.dynamics.push(Dynamics::new(sys, mode));
+            self.dynamics.push(*out);
             self.keys.len() - 1
         } else {
             let i = self.next;
-            self.keys[i] = key;
-            self.dynamics[i] = Dynamics::new(sys, mode);
+            (self.keys[i], self.dynamics[i]) = (key, *out);
             self.next = (i + 1) % DYNAMICS_CACHE_SIZE;
             i
         };
         self.hint[DynamicsCache::slot(key)] = (i + 1) as u8;
-        *out = self.dynamics[i];
     }
 }
