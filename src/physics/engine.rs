@@ -1,29 +1,23 @@
-//! Time integration of the reduced system of the current mode, and the
-//! running peaks and energy balance.
+//! Time integration of the reduced system of the current mode, and the running peaks and energy
+//! balance.
 //!
-//! The default (solver 1) is exact: each substep (`ω h <= 0.5`, or
-//! `maxStep` where shorter) goes on the exact map of the mode wherever it is
-//! proved free of switches and new peaks, and elsewhere on the exact
-//! motion's Taylor polynomials with the switch located on them. The RK4
-//! baseline (solver 2, the paper's method: switches at step ends) is the
-//! only RK4 left; the default never enters it.
+//! The default (solver 1) is exact: each substep (`ω h <= 0.5`, or `maxStep` where shorter) goes on
+//! the exact map of the mode wherever it is proved free of switches and new peaks, and elsewhere on
+//! the exact motion's Taylor polynomials with the switch located on them. The RK4 baseline (solver
+//! 2, the paper's method: switches at step ends) is the only RK4 left; the default never enters it.
 //!
-//! The state is kept per body (`u`, `v` relative to the support); a step
-//! packs one displacement and one velocity per cluster plus the energy
-//! quadratures into a short vector, integrates it, and moves every body of a
-//! cluster by its cluster's increment.
+//! The state is kept per body (`u`, `v` relative to the support); a step packs one displacement and
+//! one velocity per cluster plus the energy quadratures into a short vector, integrates it, and
+//! moves every body of a cluster by its cluster's increment.
 //!
-//! This file holds the [`Simulator`] and its stepping loop; beside it:
-//! `pieces` (excitation pieces, step sizes), `sweep` (the default's one
-//! driver: substeps on the exact map of `exact_map`, proved free of
-//! switches by `proofs`), `exact_events` (the default's other substeps:
-//! switches located on the exact motion, with the polynomials of `poly`),
-//! `bodies` (the clusters above the structure's, moving every body with its
-//! cluster), `events` (guards, firing, resolution), `report` (outputs,
-//! counters, errors), `saved_state` and `state_check` (saved states and
-//! their validation). The RK4 baseline's step lives apart, in
-//! `crate::baselines::step_end`: the `Method::StepEnd` branch of the
-//! stepping loop is its only caller.
+//! This file holds the [`Simulator`] and its stepping loop; beside it: `pieces` (excitation pieces,
+//! step sizes), `sweep` (the default's one driver: substeps on the exact map of `exact_map`, proved
+//! free of switches by `proofs`), `exact_events` (the default's other substeps: switches located on
+//! the exact motion, with the polynomials of `poly`), `bodies` (the clusters above the structure's,
+//! moving every body with its cluster), `events` (guards, firing, resolution), `report` (outputs,
+//! counters, errors), `saved_state` and `state_check` (saved states and their validation). The RK4
+//! baseline's step lives apart, in `crate::baselines::step_end`: the `Method::StepEnd` branch of
+//! the stepping loop is its only caller.
 
 use crate::limits::{SWITCH_WORK, TRY_WORK};
 use crate::physics::hermite;

@@ -78,7 +78,11 @@ impl Mode {
 
     /// The stuck interfaces (bit j).
     pub fn stuck_mask(&self) -> u32 {
-        (1..self.n + 1).fold(0, |m, j| m | u32::from(self.is_stuck(j)) << j)
+        // Contacts 1..=8 as a word's bytes (`Stuck` is 0): each zero byte's high bit, gathered.
+        let x = u64::from_le_bytes(self.contact.map(|c| c as u8)[1..].try_into().unwrap());
+        let low = 0x7f7f_7f7f_7f7f_7f7f;
+        let stuck = (!(((x & low) + low) | x | low) >> 7).wrapping_mul(0x0102_0408_1020_4080);
+        ((stuck >> 56) as u32) << 1 & ((2u32 << self.n) - 2)
     }
 }
 
@@ -233,12 +237,22 @@ impl Dynamics {
     /// interfaces.
     pub fn new(sys: &System, mode: &Mode) -> Dynamics {
         let mut d = Dynamics::clusters(sys, mode);
-        for j in 1..sys.n + 1 {
-            let constant = mode.is_stuck(j) && d.cluster_of[j] != 0;
-            if !sys.is_free(j) && !constant {
-                d.changing_guards |= 1 << j;
-            }
-        }
+        d.add_guards(sys, mode);
+        d
+    }
+
+    /// Sets `self` to [`Dynamics::new`] of `mode`, built in place.
+    pub(crate) fn build(&mut self, sys: &System, mode: &Mode) {
+        *self = Dynamics::clusters(sys, mode);
+        self.add_guards(sys, mode);
+    }
+
+    /// The guards and moving interfaces of `mode` on its clusters.
+    fn add_guards(&mut self, sys: &System, mode: &Mode) {
+        let d = self;
+        // Not free, and not a stick above the structure's cluster (its top, `top[0]`).
+        let constant = mode.stuck_mask() & !((2u32 << d.top[0]) - 1);
+        d.changing_guards = ((2u32 << sys.n) - 2) & !sys.free & !constant;
         for j in 1..sys.n + 1 {
             let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
             if hi != lo {
@@ -257,11 +271,9 @@ impl Dynamics {
                     cap: stick_capacity(sys, j),
                 }
             } else {
-                Guard::Slip {
-                    hi,
-                    lo,
-                    sign: mode.contact[j].slip_sign(),
-                }
+                let sign = mode.contact[j].slip_sign();
+                d.slip_sign[lo] = sign;
+                Guard::Slip { hi, lo, sign }
             };
             d.n_guards += 1;
         }
@@ -269,12 +281,6 @@ impl Dynamics {
         if guards.iter().any(|g| matches!(g, Guard::Stuck { .. })) {
             d.stick_band = Some(safe_accel_band(guards));
         }
-        for g in guards {
-            if let Guard::Slip { lo, sign, .. } = *g {
-                d.slip_sign[lo] = sign;
-            }
-        }
-        d
     }
 
     /// The clusters, masses and forces of `mode` only, without its guards
@@ -580,12 +586,11 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
 #[inline(always)]
 fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     let (mut bottom, mut accel_below) = (0, 0.0);
-    // (Half-open ranges in the resolution: an inclusive range's iterator
-    // tests an extra flag at every step.)
-    for end in 1..sys.n + 2 {
-        if end <= sys.n && mode.is_stuck(end) {
-            continue;
-        }
+    // The clusters' tops (bits 1..=n + 1 not stuck), up to the last `zero` decides.
+    let mut ends = !mode.stuck_mask() & ((4u32 << sys.n) - 2);
+    while ends != 0 && zero >> bottom != 0 {
+        let end = ends.trailing_zeros() as usize;
+        ends &= ends - 1;
         // Bits bottom..=end (bit 0 and bit n + 1 are never in `zero`).
         let span = (2u32 << end) - (1u32 << bottom);
         if zero & span != 0 {
@@ -683,6 +688,15 @@ fn stuck_force_up(sys: &System, mode: &Mode, load0: f64, j: usize, last: &mut Me
     sys.mass_down[j][end] * accel + f_top
 }
 
+/// The set bits of `m` (interfaces of a mask), from the lowest.
+fn bits(mut m: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        let j = m.trailing_zeros() as usize;
+        m &= m.wrapping_sub(1);
+        (j < 32).then_some(j)
+    })
+}
+
 /// A cluster met on a walk up the stack: the interface above it, its
 /// absolute acceleration.
 type Met = (usize, f64);
@@ -694,10 +708,10 @@ type Met = (usize, f64);
 #[inline(always)]
 fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize, last: &mut Met) -> Met {
     if i >= last.0 {
-        let bottom = (1..i + 1).rev().find(|&k| !mode.is_stuck(k)).unwrap_or(0);
-        let end = (i + 1..sys.n + 1)
-            .find(|&k| !mode.is_stuck(k))
-            .unwrap_or(sys.n + 1);
+        // The interfaces not stuck (and the top, n + 1) at or below i, and above it.
+        let (ends, below) = (!mode.stuck_mask() & ((4u32 << sys.n) - 2), (2u32 << i) - 1);
+        let bottom = (31 - ((ends & below) | 1).leading_zeros()) as usize;
+        let end = (ends & !below).trailing_zeros() as usize;
         let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
         *last = (end, accel);
     }
@@ -727,7 +741,7 @@ impl ResolveRequest {
     pub fn keeps_breaking(&self, sys: &System, mode: &Mode) -> bool {
         let (breaking, mut last) = (self.zero & self.must_break, (0, 0.0));
         let limit = |j: usize| sys.mus[j] * sys.normal[j] * (1.0 - 1e-8);
-        let mut kept = (1..mode.n + 1).filter(|&j| breaking & (1 << j) != 0 && mode.is_stuck(j));
+        let mut kept = bits(breaking & mode.stuck_mask());
         kept.any(|j| stuck_force_up(sys, mode, self.load0, j, &mut last).abs() >= limit(j))
     }
 }
@@ -778,7 +792,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
 #[inline(never)]
 fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let (zero, mut mode) = (req.zero & !sys.free, req.mode);
-    let ifaces = || (1..sys.n + 1).filter(move |&j| zero & (1 << j) != 0);
+    let ifaces = || bits(zero & ((2u32 << sys.n) - 2));
     sys.equal_friction(zero).then_some(())?;
     ifaces().for_each(|j| mode.contact[j] = Contact::Stuck);
     for tries in 1..zero.count_ones() + 2 {
@@ -794,7 +808,7 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
         }
         let (mut j, mut x) = (0, 1.0f64);
         let mut last = (0, 0.0);
-        for i in ifaces().filter(|&i| mode.is_stuck(i)) {
+        for i in bits(zero & mode.stuck_mask()) {
             let f = stuck_force_up(sys, &mode, req.load0, i, &mut last);
             let f = f / (sys.mus[i] * sys.normal[i]);
             (j, x) = if f.abs() > x.abs() { (i, f) } else { (j, x) };
@@ -847,7 +861,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
         return None;
     }
     let mut stuck = req.mode;
-    for j in (1..sys.n + 1).filter(|&j| zero & (1 << j) != 0) {
+    for j in bits(zero & ((2u32 << sys.n) - 2)) {
         stuck.contact[j] = Contact::Stuck;
     }
     let others = zero & !breaking;
@@ -919,7 +933,7 @@ fn ambiguity(sys: &System, req: &ResolveRequest, mode: &Mode) -> (bool, u32) {
         }
     }
     let (mut tries, mut last, counted) = (0, (0, 0.0), !req.keeps_breaking(sys, mode));
-    for j in (1..sys.n + 1).filter(|&j| counted && zero & (1 << j) != 0 && mode.is_stuck(j)) {
+    for j in bits(if counted { zero & mode.stuck_mask() } else { 0 }) {
         let force = stuck_force_up(sys, mode, load0, j, &mut last);
         if force.abs() > sys.muk[j] * sys.normal[j] {
             let mut rival = *mode;
@@ -947,7 +961,7 @@ fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking:
     let (eps, mass) = (CONSISTENCY_TOL, sys.mass_up[1][sys.n + 1]);
     let (mut bound, mut need) = (0.0, f64::INFINITY);
     let mut last = (0, 0.0);
-    (1..sys.n + 1).filter(|&j| ifaces & (1 << j) != 0).all(|j| {
+    bits(ifaces & ((2u32 << sys.n) - 2)).all(|j| {
         let k = sys.muk[j] * sys.normal[j];
         bound += 4.0 * k * eps * sys.g;
         need = need.min(if mode.is_stuck(j) {

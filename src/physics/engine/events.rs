@@ -67,30 +67,28 @@ impl Simulator {
     /// Sets one common velocity, the momentum average, on every group of
     /// bodies linked by stuck interfaces or by the interfaces in `joined`.
     pub(super) fn join_velocities(&mut self, joined: u32) {
-        let n = self.sys.n;
-        let mut start = 0;
-        for j in 1..n + 2 {
-            let linked = j <= n && (self.mode.is_stuck(j) || joined & (1 << j) != 0);
-            if linked {
-                continue;
+        let all = self.all_interfaces();
+        // The groups' bounds: the interfaces not linked, and the top (n + 1).
+        let bounds = !(self.mode.stuck_mask() | joined) & all | (2u32 << self.sys.n);
+        let mut rest = joined & all;
+        while rest != 0 {
+            // Bodies start..end, the group of the lowest joined interface left.
+            let below = (2u32 << rest.trailing_zeros()) - 1;
+            let start = (31 - ((bounds & below) | 1).leading_zeros()) as usize;
+            let end = (bounds & !below).trailing_zeros() as usize;
+            rest &= !((1u32 << end) - 1);
+            let group = start..end;
+            let m: f64 = group.clone().map(|i| self.sys.mass[i]).sum();
+            let p: f64 = group.clone().map(|i| self.sys.mass[i] * self.v[i]).sum();
+            // A prescribed support keeps its velocity (0).
+            let v = if start == 0 && self.sys.prescribed() {
+                self.v[0]
+            } else {
+                p / m
+            };
+            for i in group {
+                self.v[i] = v;
             }
-            // Bodies start..j-1 form a group.
-            let group = start..j;
-            let has_join = (start + 1..j).any(|i| joined & (1 << i) != 0);
-            if has_join {
-                let m: f64 = group.clone().map(|i| self.sys.mass[i]).sum();
-                let p: f64 = group.clone().map(|i| self.sys.mass[i] * self.v[i]).sum();
-                // A prescribed support keeps its velocity (0).
-                let v = if start == 0 && self.sys.prescribed() {
-                    self.v[0]
-                } else {
-                    p / m
-                };
-                for i in group {
-                    self.v[i] = v;
-                }
-            }
-            start = j;
         }
     }
 
@@ -330,7 +328,8 @@ impl DynamicsCache {
     #[cold]
     #[inline(never)]
     fn insert(&mut self, key: u32, sys: &System, mode: &Mode, out: &mut Dynamics) {
-        // Built where it is kept, then copied once.
+        // Built in `out`, then copied once.
+        out.build(sys, mode);
         let i = if self.keys.len() < DYNAMICS_CACHE_SIZE {
             if self.keys.is_empty() {
                 // Room for every entry at once: a growing vector would copy
@@ -339,16 +338,14 @@ impl DynamicsCache {
                 self.dynamics.reserve_exact(DYNAMICS_CACHE_SIZE);
             }
             self.keys.push(key);
-            self.dynamics.push(Dynamics::new(sys, mode));
+            self.dynamics.push(*out);
             self.keys.len() - 1
         } else {
             let i = self.next;
-            self.keys[i] = key;
-            self.dynamics[i] = Dynamics::new(sys, mode);
+            (self.keys[i], self.dynamics[i]) = (key, *out);
             self.next = (i + 1) % DYNAMICS_CACHE_SIZE;
             i
         };
         self.hint[DynamicsCache::slot(key)] = (i + 1) as u8;
-        *out = self.dynamics[i];
     }
 }

@@ -1,33 +1,27 @@
-//! The default method's event path: a substep the fast path hands back (one
-//! that holds a switch or a new interior peak) taken exactly, switches
-//! located on the exact motion instead of on RK4 re-steps.
+//! The default method's event path: a substep the fast path hands back (one that holds a switch or
+//! a new interior peak) taken exactly, switches located on the exact motion instead of on RK4
+//! re-steps.
 //!
-//! In one mode and one linear piece of excitation the structure's cluster is
-//! `z' = A z` over `z = [u, v, p, p']` (`exact_map`), so over the rest of a
-//! substep its state is the Taylor series of `exp(A τ) z`, summed to
-//! round-off (the substep keeps `ω h <= 0.5`): `u` and `v` are polynomials
-//! in `s = τ / H`. The clusters above it move as exact polynomials of degree
-//! three at most. Every guard is then a polynomial in `s`: a stick guard of
-//! the structure's cluster is a band of its absolute acceleration, a slip
-//! guard a relative velocity.
+//! In one mode and one linear piece of excitation the structure's cluster is `z' = A z` over
+//! `z = [u, v, p, p']` (`exact_map`), so over the rest of a substep its state is the Taylor series
+//! of `exp(A τ) z`, summed to round-off (the substep keeps `ω h <= 0.5`): `u` and `v` are
+//! polynomials in `s = τ / H`. The clusters above it move as exact polynomials of degree three at
+//! most. Every guard is then a polynomial in `s`: a stick guard of the structure's cluster is a
+//! band of its absolute acceleration, a slip guard a relative velocity.
 //!
-//! [`first_zero`] finds the first zero of a guard in `(0, 1]` with a proof
-//! that none comes before it: a stretch is passed when Taylor's bounds from
-//! both of its ends (with a bound on `|g''|` from the coefficients) keep the
-//! guard positive over it, and a sign change is refined by Newton's method
-//! only on a stretch where `g' < 0` is proved (a single crossing); anything
-//! else is halved. The motion is then taken to that instant with exact
-//! energies (the input work from `∫u`, the viscous work from `∫v²`, both
-//! integrals of the polynomials) and exact running peaks (at the sign changes
-//! of the derivative, found the same way); the guard fires, the mode is
-//! resolved, and the rest of the substep continues in the new mode. The
-//! chatter guards of `Simulator::step_located` are kept: a guard violated
-//! from the start fires at once (a zero-length event), and every guard is
-//! muted after `MAX_EVENTS_PER_STEP` events; an interface that fires at once
-//! twice in the substep, or a search that cannot decide within its budget,
-//! hands the rest of the substep to fine stretches of the same exact motion
-//! (`ω h <= 0.01`), where the contact is muted for one stretch only and an
-//! undecided search halves the stretch.
+//! [`first_zero`] finds the first zero of a guard in `(0, 1]` with a proof that none comes before
+//! it: a stretch is passed when Taylor's bounds from both of its ends (with a bound on `|g''|` from
+//! the coefficients) keep the guard positive over it, and a sign change is refined by Newton's
+//! method only on a stretch where `g' < 0` is proved (a single crossing); anything else is halved.
+//! The motion is then taken to that instant with exact energies (the input work from `∫u`, the
+//! viscous work from `∫v²`, both integrals of the polynomials) and exact running peaks (at the sign
+//! changes of the derivative, found the same way); the guard fires, the mode is resolved, and the
+//! rest of the substep continues in the new mode. The chatter guards of `Simulator::step_located`
+//! are kept: a guard violated from the start fires at once (a zero-length event), and every guard
+//! is muted after `MAX_EVENTS_PER_STEP` events; an interface that fires at once twice in the
+//! substep, or a search that cannot decide within its budget, hands the rest of the substep to fine
+//! stretches of the same exact motion (`ω h <= 0.01`), where the contact is muted for one stretch
+//! only and an undecided search halves the stretch.
 
 use super::poly::*;
 use super::*;
