@@ -103,15 +103,17 @@ pub(super) fn raise_substep_peaks(
         let mut t = h * x2 * x * (10.0 - 15.0 * x + 6.0 * x2)
             + dd * x * x1 * (x1 * x1 * (1.0 + 3.0 * x) * g0 - x2 * (4.0 - 3.0 * x) * g1)
             - 0.5 * dd * dd * x2 * x1 * x1 * (x1 * f0 * g0 * g0 * g0 + x * f1 * g1 * g1 * g1);
-        let n = (deg + 2) & !1; // (with the zero past an even degree)
         for _ in 0..4 {
-            // Horner's rule in s² on the even and odd terms, u's and v's at once.
-            let (s, mut uw, mut vw) = (t * inv_h, [0.0; 2], [0.0; 2]);
-            for (a, b) in u.c[..n].chunks_exact(2).zip(v.c.chunks_exact(2)).rev() {
-                uw = [uw[0] * (s * s) + a[0], uw[1] * (s * s) + a[1]];
-                vw = [vw[0] * (s * s) + b[0], vw[1] * (s * s) + b[1]];
-            }
-            let [y, d, e, _] = y_at(k, t, [uw[0] + s * uw[1], vw[0] + s * vw[1]]);
+            // Horner's rule in s² on the even and odd terms (shorter chains).
+            let (s, s2) = (t * inv_h, (t * inv_h) * (t * inv_h));
+            let at = |p: &Poly| {
+                let pairs = p.c[..deg + 1].chunks(2).rev();
+                let [e, o] = pairs.fold([0.0, 0.0], |[e, o], c| {
+                    [e * s2 + c[0], o * s2 + c.get(1).unwrap_or(&0.0)]
+                });
+                e + s * o
+            };
+            let [y, d, e, _] = y_at(k, t, [at(&u), at(&v)]);
             if d.abs() <= m * tol * h && (0.0..=h).contains(&t) {
                 *peak = peak.max(y0.abs()).max(y_end.abs()).max(y.abs());
                 return Some(());
