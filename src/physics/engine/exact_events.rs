@@ -105,13 +105,12 @@ pub(super) fn raise_substep_peaks(
             + dd * x * x1 * (x1 * x1 * (1.0 + 3.0 * x) * g0 - x2 * (4.0 - 3.0 * x) * g1)
             - 0.5 * dd * dd * x2 * x1 * x1 * (x1 * f0 * g0 * g0 * g0 + x * f1 * g1 * g1 * g1);
         for _ in 0..4 {
-            // Horner's rule in s² on the even and odd terms (shorter chains).
+            // Horner's rule in s² on the even and odd terms (shorter chains; whole pairs, the
+            // coefficient past an even degree being zero).
             let (s, s2) = (t * inv_h, (t * inv_h) * (t * inv_h));
             let at = |p: &Poly| {
-                let pairs = p.c[..deg + 1].chunks(2).rev();
-                let [e, o] = pairs.fold([0.0, 0.0], |[e, o], c| {
-                    [e * s2 + c[0], o * s2 + c.get(1).unwrap_or(&0.0)]
-                });
+                let pairs = p.c[..(deg + 2) & !1].chunks_exact(2).rev();
+                let [e, o] = pairs.fold([0.0, 0.0], |[e, o], c| [e * s2 + c[0], o * s2 + c[1]]);
                 e + s * o
             };
             let [y, d, e, f] = y_at(k, t, [at(&u), at(&v)]);
