@@ -84,9 +84,10 @@ pub(super) fn raise_substep_peaks(
         let (d, e) = (c1 + ku * v + kv * a, ku * a + kv * j);
         [y, d, e, ku * j - kv * (w2 * a + cm * j)]
     };
-    // The usual case first (else None): y' changes sign and |y''| >= m > 0
-    // (its ends less h²/8 sup|y''''|), one zero; Newton's steps from the
-    // inverse quintic through the ends of y', y'', y''' until |y'| <= m tol h.
+    // The usual case first (else None): y' changes sign and |y''| >= m > 0 (its ends less
+    // h²/8 sup|y''''|), one zero t*; Halley's steps from the inverse quintic through the ends
+    // of y', y'', y''' until at t, |t* - t| <= q = |y'|/m and y(t*) = y - y'²/(2y'') within
+    // b q³/2 <= 1e-17 |y| (b = |y'''| + h sup|y''''| bounds |y'''|; b q <= m).
     let fast = |peak: &mut f64, k: [f64; 4], fourth: f64, y_end: f64| {
         let ([y0, d0, e0, f0], [_, d1, e1, f1]) =
             (y_at(k, 0.0, [z[0], z[1]]), y_at(k, h, [u_end, v_end]));
@@ -98,21 +99,22 @@ pub(super) fn raise_substep_peaks(
             + dd * x * x1 * (x1 * x1 * (1.0 + 3.0 * x) * g0 - x2 * (4.0 - 3.0 * x) * g1)
             - 0.5 * dd * dd * x2 * x1 * x1 * (x1 * f0 * g0 * g0 * g0 + x * f1 * g1 * g1 * g1);
         for _ in 0..4 {
-            // Horner's rule in s² on the even and odd terms (shorter chains).
+            // Horner's rule in s² on the even and odd terms (shorter chains; whole pairs, the
+            // coefficient past an even degree being zero).
             let (s, s2) = (t * inv_h, (t * inv_h) * (t * inv_h));
             let at = |p: &Poly| {
-                let pairs = p.c[..deg + 1].chunks(2).rev();
-                let [e, o] = pairs.fold([0.0, 0.0], |[e, o], c| {
-                    [e * s2 + c[0], o * s2 + c.get(1).unwrap_or(&0.0)]
-                });
+                let pairs = p.c[..(deg + 2) & !1].chunks_exact(2).rev();
+                let [e, o] = pairs.fold([0.0, 0.0], |[e, o], c| [e * s2 + c[0], o * s2 + c[1]]);
                 e + s * o
             };
-            let [y, d, e, _] = y_at(k, t, [at(&u), at(&v)]);
-            if d.abs() <= m * tol * h && (0.0..=h).contains(&t) {
-                *peak = peak.max(y0.abs()).max(y_end.abs()).max(y.abs());
+            let [y, d, e, f] = y_at(k, t, [at(&u), at(&v)]);
+            let bq = (f.abs() + h * fourth) * (d.abs() / m);
+            if bq <= m && bq * (d / m) * (d / m) <= 2e-17 * y.abs() && (0.0..=h).contains(&t) {
+                let top = (y - 0.5 * d * d / e).abs();
+                *peak = peak.max(y0.abs()).max(y_end.abs()).max(top);
                 return Some(());
             }
-            t -= d / e;
+            t -= d / (e - 0.5 * d * f / e);
         }
         None
     };

@@ -266,10 +266,7 @@ pub(super) fn raise_peak_inside(
     e: f64,
     tol: f64,
 ) -> Result<(), Undecided> {
-    let ends = y.c[0].abs().max(y_end.abs());
-    if ends > *peak {
-        *peak = ends;
-    }
+    *peak = peak.max(y.c[0].abs()).max(y_end.abs());
     let derivative;
     let dy = match rate {
         Some(rate) => rate,
@@ -294,16 +291,18 @@ pub(super) fn raise_peak_inside(
                 g.negate(); // (its end values negated exactly too)
                 refine(&g, ends[0], ends[1], [tol, near])
             };
-            let at = y.eval(r).abs();
-            if at > *peak {
-                *peak = at;
-            }
+            *peak = peak.max(y.eval(r).abs());
             return Ok(());
         }
     }
+    // y' keeps its sign, or is monotone (|y''| > 0 over [0, e]) from ends of one sign: the
+    // ends decide.
     let dy_spread = dy.spread(e);
-    if dy.c[0].abs() > dy_spread {
-        return Ok(()); // y' keeps its sign: the ends decide
+    let one_sign = d0.min(d_end) >= 0.0 || d0.max(d_end) <= 0.0;
+    if dy.c[0].abs() > dy_spread
+        || (dy.deg >= 2 && one_sign && dy.c[1].abs() > dy.rate_spread(1, e))
+    {
+        return Ok(());
     }
     // The sign of y' just after 0 (y' may start at zero).
     let scale = dy.c[0].abs() + dy_spread;
@@ -327,10 +326,7 @@ pub(super) fn raise_peak_inside(
         let Some(r) = zero else {
             return Ok(());
         };
-        let at = y.eval(r).abs();
-        if at > *peak {
-            *peak = at;
-        }
+        *peak = peak.max(y.eval(r).abs());
         // The next sign change of y', from the other side.
         g.negate();
         let (ga, da) = g.eval_d(r);
