@@ -380,7 +380,7 @@ impl Simulator {
                     if piece.i > piece.n {
                         break;
                     }
-                    self.exact_substep(piece.end_of(piece.i), &piece);
+                    self.exact_stretch(piece.end_of(piece.i), &piece, 0);
                     piece.i += 1;
                     self.check_work()?;
                 },

@@ -53,17 +53,6 @@ impl Simulator {
         }
     }
 
-    /// Acts on guards that have fired at the current instant: a slipping
-    /// interface whose relative velocity reached zero gets its two sides
-    /// joined at their common momentum velocity; a stuck interface whose
-    /// force reached `mus N` must break. Then the mode is resolved.
-    pub(super) fn fire(&mut self, slip_zeroed: u32, must_break: u32) {
-        if slip_zeroed != 0 {
-            self.join_velocities(slip_zeroed);
-        }
-        self.resolve_mode(must_break);
-    }
-
     /// Sets one common velocity, the momentum average, on every group of
     /// bodies linked by stuck interfaces or by the interfaces in `joined`.
     pub(super) fn join_velocities(&mut self, joined: u32) {
@@ -197,7 +186,7 @@ impl Simulator {
         t_ref: f64,
         candidates: u32,
         forced: u32,
-    ) -> bool {
+    ) {
         self.take_inputs_now(exc, t_ref);
         let load0 = self.load0();
         let (mut slip_zeroed, mut must_break) = (0, 0);
@@ -216,11 +205,13 @@ impl Simulator {
                 }
             }
         }
+        // A slipping interface whose relative velocity reached zero gets its two sides joined at
+        // their common momentum velocity; a stuck one whose force reached `mus N` must break.
+        if slip_zeroed != 0 {
+            self.join_velocities(slip_zeroed);
+        }
         if slip_zeroed | must_break != 0 {
-            self.fire(slip_zeroed, must_break);
-            true
-        } else {
-            false
+            self.resolve_mode(must_break);
         }
     }
 

@@ -1,6 +1,5 @@
 //! The default method's event path: a substep the fast path hands back (one that holds a switch or
-//! a new interior peak) taken exactly, switches located on the exact motion instead of on RK4
-//! re-steps.
+//! a new interior peak) taken exactly, switches located on the exact motion.
 //!
 //! In one mode and one linear piece of excitation the structure's cluster is `z' = A z` over
 //! `z = [u, v, p, p']` (`exact_map`), so over the rest of a substep its state is the Taylor series
@@ -16,12 +15,12 @@
 //! The motion is then taken to that instant with exact energies (the input work from `∫u`, the
 //! viscous work from `∫v²`, both integrals of the polynomials) and exact running peaks (at the sign
 //! changes of the derivative, found the same way); the guard fires, the mode is resolved, and the
-//! rest of the substep continues in the new mode. The chatter guards of `Simulator::step_located`
-//! are kept: a guard violated from the start fires at once (a zero-length event), and every guard
-//! is muted after `MAX_EVENTS_PER_STEP` events; an interface that fires at once twice in the
-//! substep, or a search that cannot decide within its budget, hands the rest of the substep to fine
-//! stretches of the same exact motion (`ω h <= 0.01`), where the contact is muted for one stretch
-//! only and an undecided search halves the stretch.
+//! rest of the substep continues in the new mode. Against chatter, a guard violated from the start
+//! fires at once (a zero-length event), and every guard is muted after `MAX_EVENTS_PER_STEP`
+//! events; an interface that fires at once twice in the substep, or a search that cannot decide
+//! within its budget, hands the rest of the substep to fine stretches of the same exact motion
+//! (`ω h <= 0.01`), where the contact is muted for one stretch only and an undecided search halves
+//! the stretch.
 
 use super::poly::*;
 use super::*;
@@ -371,20 +370,13 @@ enum Next {
 }
 
 impl Simulator {
-    /// The rest of the current substep, to `t1` within `piece`, on the exact
-    /// motion with switches located on it (see the module's text).
-    pub(super) fn exact_substep(&mut self, t1: f64, piece: &Piece) {
-        self.exact_stretch(t1, piece, 0);
-    }
-
-    /// The motion to `t1`: the rest of a substep (`depth` 0) or a shorter
-    /// stretch of it (`depth` >= 1). A substep that cannot be decided (a
-    /// search over its budget, a contact that chatters) goes on in fine
-    /// stretches of at most `h_fine`; in those a chattering contact is muted
-    /// for the rest of the stretch (switched at its end), and a search that
-    /// cannot decide halves the stretch, down to `MAX_SPLIT_DEPTH` halvings,
-    /// where the guards are muted and the peaks taken at the stretch's ends.
-    fn exact_stretch(&mut self, t1: f64, piece: &Piece, depth: u32) {
+    /// The motion to `t1` within `piece`, switches located on it (see the module's text): the
+    /// rest of a substep (`depth` 0) or a shorter stretch of it (`depth` >= 1). A substep that
+    /// cannot be decided (a search over its budget, a contact that chatters) goes on in fine
+    /// stretches of at most `h_fine`; in those a chattering contact is muted for the rest of the
+    /// stretch (switched at its end), and a search that cannot decide halves the stretch, down
+    /// to `MAX_SPLIT_DEPTH` halvings, where the guards are muted and the peaks taken at its ends.
+    pub(super) fn exact_stretch(&mut self, t1: f64, piece: &Piece, depth: u32) {
         let (exc, t_ref) = (&piece.exc, piece.t_ref);
         let ends_only = depth >= MAX_SPLIT_DEPTH;
         let mut muted: u32 = 0;
@@ -517,7 +509,8 @@ impl Simulator {
                     continue;
                 }
                 let poly = &*poly;
-                let (g0, d0) = poly.start();
+                // Value and derivative at 0: its first two coefficients.
+                let (g0, d0) = (poly.c[0], if poly.deg >= 1 { poly.c[1] } else { 0.0 });
                 // Only zeros before the earliest one found so far matter.
                 let end = earliest.map_or(1.0, |(s, _)| s);
                 let start = [0.0, g0.max(0.0), d0];
@@ -673,7 +666,10 @@ impl Simulator {
                 for k in 0..3 {
                     c[k + 1] += upper[k];
                 }
-                let slip = Poly::new(c, flow.u.deg.max(3));
+                let slip = Poly {
+                    c,
+                    deg: flow.u.deg.max(3),
+                };
                 raise_peak_over(peak, &slip, None, [slip1, spread], s, peak_tol, ends_only)?;
             }
         } else {
@@ -801,7 +797,7 @@ mod tests {
             ..Default::default()
         };
         let h = sim.map_step();
-        sim.exact_substep(h, &Piece::new(0.0, h, &exc, h));
+        sim.exact_stretch(h, &Piece::new(0.0, h, &exc, h), 0);
         let (omega, zeta) = (sim.sys.omega_p, p.zeta);
         let load = |t: f64| -(ag + ag_rate * t);
         let at = |t: f64| sdof::step(omega, zeta, t, (u0, v0), load(0.0), load(t));

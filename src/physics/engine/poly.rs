@@ -33,10 +33,6 @@ pub(super) struct Poly {
 }
 
 impl Poly {
-    pub(super) fn new(c: [f64; N_COEF], deg: usize) -> Poly {
-        Poly { c, deg }
-    }
-
     /// A bound of `|p''|` (`n` = 2) or `|p'''|` (3) over [0, 1] (triangle
     /// inequality; the factor covers the rounding of the coefficients and
     /// of the sums).
@@ -124,20 +120,15 @@ impl Poly {
         (y, d)
     }
 
-    /// Value and derivative at `s = 0`, its first two coefficients (those
-    /// of [`Poly::eval_d`] at 0 for finite coefficients, without the
-    /// evaluation).
-    #[inline]
-    pub(super) fn start(&self) -> (f64, f64) {
-        (self.c[0], if self.deg >= 1 { self.c[1] } else { 0.0 })
-    }
-
     pub(super) fn derivative(&self) -> Poly {
         let mut c = [0.0; N_COEF];
         for k in 1..self.deg + 1 {
             c[k - 1] = k as f64 * self.c[k];
         }
-        Poly::new(c, self.deg.max(1) - 1)
+        Poly {
+            c,
+            deg: self.deg.max(1) - 1,
+        }
     }
 }
 
@@ -416,7 +407,10 @@ mod tests {
     fn poly(c: &[f64]) -> Poly {
         let mut k = [0.0; N_COEF];
         k[..c.len()].copy_from_slice(c);
-        Poly::new(k, c.len() - 1)
+        Poly {
+            c: k,
+            deg: c.len() - 1,
+        }
     }
 
     /// Coefficients of `lead · Π (s - r)`.
