@@ -467,7 +467,7 @@ impl Simulator {
     /// For the step-end baseline (`crate::baselines::step_end`) at a
     /// step's end: every violated guard switches there.
     pub(crate) fn fire_all_violated(&mut self, exc: &Excitation, t_ref: f64) {
-        let all = self.all_interfaces();
+        let all = self.sys.interfaces();
         self.fire_violated(exc, t_ref, all, 0);
     }
 

@@ -84,6 +84,21 @@ impl Mode {
         let stuck = (!(((x & low) + low) | x | low) >> 7).wrapping_mul(0x0102_0408_1020_4080);
         ((stuck >> 56) as u32) << 1 & ((2u32 << self.n) - 2)
     }
+
+    /// Where the clusters end: the interfaces not stuck, and the top (bit n + 1).
+    pub fn cluster_ends(&self) -> u32 {
+        !self.stuck_mask() & ((4u32 << self.n) - 2)
+    }
+}
+
+/// The bodies between the `ends` around body `i`: from the highest end at or below `i` (or 0)
+/// to the lowest above it.
+pub(crate) fn span_around(ends: u32, i: usize) -> [usize; 2] {
+    let (below, above) = (ends & ((2u32 << i) - 1), ends & !((2u32 << i) - 1));
+    [
+        (31 - (below | 1).leading_zeros()) as usize,
+        above.trailing_zeros() as usize,
+    ]
 }
 
 /// A guard of a mode in the form the fast path evaluates it at a step end.
@@ -252,7 +267,7 @@ impl Dynamics {
         let d = self;
         // Not free, and not a stick above the structure's cluster (its top, `top[0]`).
         let constant = mode.stuck_mask() & !((2u32 << d.top[0]) - 1);
-        d.changing_guards = ((2u32 << sys.n) - 2) & !sys.free & !constant;
+        d.changing_guards = sys.interfaces() & !sys.free & !constant;
         for j in 1..sys.n + 1 {
             let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
             if hi != lo {
@@ -587,7 +602,7 @@ pub fn violation(sys: &System, mode: &Mode, zero: u32, load0: f64) -> f64 {
 fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
     let (mut bottom, mut accel_below) = (0, 0.0);
     // The clusters' tops (bits 1..=n + 1 not stuck), up to the last `zero` decides.
-    let mut ends = !mode.stuck_mask() & ((4u32 << sys.n) - 2);
+    let mut ends = mode.cluster_ends();
     while ends != 0 && zero >> bottom != 0 {
         let end = ends.trailing_zeros() as usize;
         ends &= ends - 1;
@@ -708,10 +723,7 @@ type Met = (usize, f64);
 #[inline(always)]
 fn body_accel(sys: &System, mode: &Mode, load0: f64, i: usize, last: &mut Met) -> Met {
     if i >= last.0 {
-        // The interfaces not stuck (and the top, n + 1) at or below i, and above it.
-        let (ends, below) = (!mode.stuck_mask() & ((4u32 << sys.n) - 2), (2u32 << i) - 1);
-        let bottom = (31 - ((ends & below) | 1).leading_zeros()) as usize;
-        let end = (ends & !below).trailing_zeros() as usize;
+        let [bottom, end] = span_around(mode.cluster_ends(), i);
         let (accel, _) = cluster_law(sys, mode, 0, load0, [bottom, end], 0.0, f64::INFINITY);
         *last = (end, accel);
     }
@@ -792,7 +804,7 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
 #[inline(never)]
 fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let (zero, mut mode) = (req.zero & !sys.free, req.mode);
-    let ifaces = || bits(zero & ((2u32 << sys.n) - 2));
+    let ifaces = || bits(zero & sys.interfaces());
     sys.equal_friction(zero).then_some(())?;
     ifaces().for_each(|j| mode.contact[j] = Contact::Stuck);
     for tries in 1..zero.count_ones() + 2 {
@@ -861,7 +873,7 @@ fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) ->
         return None;
     }
     let mut stuck = req.mode;
-    for j in bits(zero & ((2u32 << sys.n) - 2)) {
+    for j in bits(zero & sys.interfaces()) {
         stuck.contact[j] = Contact::Stuck;
     }
     let others = zero & !breaking;
@@ -961,7 +973,7 @@ fn only_consistent(sys: &System, mode: &Mode, ifaces: u32, load0: f64, sticking:
     let (eps, mass) = (CONSISTENCY_TOL, sys.mass_up[1][sys.n + 1]);
     let (mut bound, mut need) = (0.0, f64::INFINITY);
     let mut last = (0, 0.0);
-    bits(ifaces & ((2u32 << sys.n) - 2)).all(|j| {
+    bits(ifaces & sys.interfaces()).all(|j| {
         let k = sys.muk[j] * sys.normal[j];
         bound += 4.0 * k * eps * sys.g;
         need = need.min(if mode.is_stuck(j) {

@@ -132,6 +132,11 @@ impl System {
         zero & self.unequal == 0
     }
 
+    /// Every interface of the stack (bit j, 1..=n).
+    pub fn interfaces(&self) -> u32 {
+        (2u32 << self.n) - 2
+    }
+
     /// An interface with no static friction transmits no force and never sticks.
     pub fn is_free(&self, j: usize) -> bool {
         self.free & (1 << j) != 0

@@ -16,11 +16,6 @@ impl Simulator {
         z & !self.sys.free
     }
 
-    /// Every interface of the stack (bit j).
-    pub(super) fn all_interfaces(&self) -> u32 {
-        (2u32 << self.sys.n) - 2
-    }
-
     /// Re-resolves the mode at the current state; counts a switch if it changed.
     pub(super) fn resolve_mode(&mut self, must_break: u32) {
         let req = ResolveRequest {
@@ -56,15 +51,12 @@ impl Simulator {
     /// Sets one common velocity, the momentum average, on every group of
     /// bodies linked by stuck interfaces or by the interfaces in `joined`.
     pub(super) fn join_velocities(&mut self, joined: u32) {
-        let all = self.all_interfaces();
-        // The groups' bounds: the interfaces not linked, and the top (n + 1).
-        let bounds = !(self.mode.stuck_mask() | joined) & all | (2u32 << self.sys.n);
-        let mut rest = joined & all;
+        // The groups' bounds: the clusters' ends less the joined interfaces.
+        let bounds = self.mode.cluster_ends() & !joined;
+        let mut rest = joined & self.sys.interfaces();
         while rest != 0 {
             // Bodies start..end, the group of the lowest joined interface left.
-            let below = (2u32 << rest.trailing_zeros()) - 1;
-            let start = (31 - ((bounds & below) | 1).leading_zeros()) as usize;
-            let end = (bounds & !below).trailing_zeros() as usize;
+            let [start, end] = mode::span_around(bounds, rest.trailing_zeros() as usize);
             rest &= !((1u32 << end) - 1);
             let group = start..end;
             let m: f64 = group.clone().map(|i| self.sys.mass[i]).sum();
@@ -120,7 +112,7 @@ impl Simulator {
     /// very instant: the support's acceleration then jumps by the error of
     /// the step's extrapolation, and the slip must go on.
     pub(super) fn violated_at_jump(&mut self, exc: &Excitation) -> u32 {
-        let all = self.all_interfaces();
+        let all = self.sys.interfaces();
         if !self.sys.prescribed() {
             return all;
         }
@@ -192,7 +184,7 @@ impl Simulator {
         let (mut slip_zeroed, mut must_break) = (0, 0);
         // Only the interfaces asked about: a guard is computed where it
         // decides (not for a forced one).
-        let mut asked = (forced | candidates) & self.all_interfaces();
+        let mut asked = (forced | candidates) & self.sys.interfaces();
         while asked != 0 {
             let j = asked.trailing_zeros() as usize;
             asked &= asked - 1;
@@ -227,7 +219,7 @@ impl Simulator {
         muted: &mut u32,
         events: &mut u32,
     ) {
-        let all = self.all_interfaces();
+        let all = self.sys.interfaces();
         self.fire_violated(exc, t_ref, searched & !*muted, 1 << j);
         *events += 1;
         if *events >= MAX_EVENTS_PER_STEP {

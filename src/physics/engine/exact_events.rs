@@ -32,13 +32,7 @@ use crate::physics::mode::{Guard, Moving};
 /// Returns their spreads (`Poly::spread(1)`, summed as they come) and
 /// that of `v`'s terms past the second (inlined: dropped where unused).
 #[inline(always)]
-fn taylor_uv<const SCALAR: bool>(
-    z: [f64; 4],
-    h: f64,
-    [w2, cm]: [f64; 2],
-    deg: usize,
-    uv: [&mut Poly; 2],
-) -> [f64; 3] {
+fn taylor_uv(z: [f64; 4], h: f64, [w2, cm]: [f64; 2], deg: usize, uv: [&mut Poly; 2]) -> [f64; 3] {
     let [u, v] = uv;
     // The forcing's part `[p, p']` is linear in time: after two terms its entries are
     // `f · 0.0 = +0.0` (`f > 0`), left out of the rest (`0.0 - w2 u`: the same values).
@@ -54,26 +48,16 @@ fn taylor_uv<const SCALAR: bool>(
     (u.c[2], v.c[2]) = (y0, y1);
     let heads = [heads[0] + y0.abs(), heads[1] + y1.abs()];
     let mut tails = [0.0, 0.0];
-    if SCALAR {
-        // `u` and `v` carried as a pair (or their tails summed as one) would have the compiler
-        // pack them, its shuffles lengthening the recurrence's chain by a third.
-        let deg = deg.min(N_COEF - 1);
-        for k in 3..deg + 1 {
-            let f = h * INV[k - 1];
-            (u.c[k], y1) = (f * y1, f * (0.0 - w2 * u.c[k - 1] - cm * y1));
-            v.c[k] = y1;
-            tails[1] += y1.abs();
-        }
-        tails[0] = u.c[3..=deg].iter().fold(0.0, |t, c| t + c.abs());
-    } else {
-        let terms = u.c[3..=deg].iter_mut().zip(&mut v.c[3..=deg]);
-        for ((uk, vk), inv) in terms.zip(&INV[2..deg]) {
-            let f = h * inv;
-            [y0, y1] = [f * y1, f * (0.0 - w2 * y0 - cm * y1)];
-            (*uk, *vk) = (y0, y1);
-            tails = [tails[0] + y0.abs(), tails[1] + y1.abs()];
-        }
+    // `u` and `v` carried as a pair (or their tails summed as one) would have the compiler pack
+    // them, its shuffles lengthening the recurrence's chain by a third.
+    let deg = deg.min(N_COEF - 1);
+    for k in 3..deg + 1 {
+        let f = h * INV[k - 1];
+        (u.c[k], y1) = (f * y1, f * (0.0 - w2 * u.c[k - 1] - cm * y1));
+        v.c[k] = y1;
+        tails[1] += y1.abs();
     }
+    tails[0] = u.c[3..=deg].iter().fold(0.0, |t, c| t + c.abs());
     (u.deg, v.deg) = (deg, deg);
     [heads[0] + tails[0], heads[1] + tails[1], tails[1]]
 }
@@ -93,7 +77,7 @@ pub(super) fn raise_substep_peaks(
     fourth: [f64; 2],
 ) -> Result<(), Undecided> {
     let (mut u, mut v) = (Poly::default(), Poly::default());
-    taylor_uv::<false>(z, h, [w2, cm], deg, [&mut u, &mut v]);
+    taylor_uv(z, h, [w2, cm], deg, [&mut u, &mut v]);
     let tol = PEAK_TOL.max(EVENT_TIME_TOL / h);
     // y = ku u + kv v + c0 + c1 τ (u, or A), y', y'' and y''' at τ from the state.
     let y_at = |[ku, kv, c0, c1]: [f64; 4], t: f64, [u, v]: [f64; 2]| {
@@ -206,7 +190,7 @@ impl Flow {
         let p0 = d.load_accel0 + q0;
         let p1 = d.input_accel(exc.ag_rate, exc.fext_rate) - exc.ag_rate;
         let (z, uv) = ([sim.u[0], sim.v[0], p0, p1], [&mut self.u, &mut self.v]);
-        [self.u_spread, self.v_spread, self.v_tail] = taylor_uv::<true>(z, h, [w2, cm], deg, uv);
+        [self.u_spread, self.v_spread, self.v_tail] = taylor_uv(z, h, [w2, cm], deg, uv);
         self.accel_linear = [p0 + ag0, p1 + exc.ag_rate];
         self.accel_start = p0 + ag0 - w2 * sim.u[0] - cm * sim.v[0];
         self.accel_spread_bound =
