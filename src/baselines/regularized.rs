@@ -252,8 +252,8 @@ impl RegularizedSimulator {
         let (s, n) = (&self.sys, self.sys.n);
         let v = |i: usize| y[MAX_BODIES + i];
         let mut f = [0.0; MAX_BODIES + 1];
-        for j in 1..=n {
-            f[j] = self.friction(j, v(j) - v(j - 1));
+        for (j, fj) in f.iter_mut().enumerate().take(n + 1).skip(1) {
+            *fj = self.friction(j, v(j) - v(j - 1));
         }
         let mut a = [0.0; MAX_BODIES];
         a[0] = (fext - s.k * y[0] - s.c * v(0) - f[1]) / s.mass[0];

@@ -531,6 +531,10 @@ fn real(v: f64) -> Option<String> {
     Some(format!("{v:?}"))
 }
 
+/// A per-block variable: its id from the block's index, its quantity and
+/// its description (with `{j}` for the block's number).
+type PerBlock = (fn(usize) -> Id, &'static str, &'static str);
+
 /// Every variable, in model-description order.
 pub fn table() -> Vec<Variable> {
     let d = Params::default();
@@ -664,7 +668,7 @@ pub fn table() -> Vec<Variable> {
         None,
         "Force on the support, k up + c vp",
     );
-    let per_block: [(fn(usize) -> Id, &'static str, &str); 6] = [
+    let per_block: [PerBlock; 6] = [
         (
             Id::Ub,
             "Displacement",

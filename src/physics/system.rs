@@ -87,13 +87,15 @@ impl System {
         }
         let mut mass_up = [[0.0; MAX_BODIES + 1]; MAX_BODIES];
         let mut mass_down = [[0.0; MAX_BODIES + 1]; MAX_BODIES];
-        for a in 0..=n {
+        for (a, up) in mass_up.iter_mut().enumerate().take(n + 1) {
             let mut sum = 0.0;
             for e in a + 1..=n + 1 {
                 sum += mass[e - 1];
-                mass_up[a][e] = sum;
+                up[e] = sum;
             }
         }
+        // Summed from `e - 1` down (its rounding is the masses' below `e`).
+        #[allow(clippy::needless_range_loop)]
         for e in 1..=n + 1 {
             let mut sum = 0.0;
             for i in (0..e).rev() {

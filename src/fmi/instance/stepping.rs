@@ -319,7 +319,7 @@ impl Instance {
                 // is held at that value: `ag` as the engine took its input
                 // part to the step's end (a support's outputs see it), `Fext`
                 // as the engine ended the step.
-                self.d.ag = self.d.ag + self.d.der_ag * (sim_end - sim_time);
+                self.d.ag += self.d.der_ag * (sim_end - sim_time);
                 self.d.fext = if check_scalar("Fext", fext_engine).is_ok() {
                     fext_engine
                 } else {
