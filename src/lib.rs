@@ -18,7 +18,9 @@
 //!   call, beside the FMI API (for parametric studies).
 //!
 //! [`limits`] holds the bounds that keep an instance safe inside its host
-//! process; all rooms read them.
+//! process; all rooms read them. [`isa`] compiles the engine's two hottest
+//! functions a second time for AVX-512 and picks the copy at each call (the
+//! same results bit for bit).
 
 #![warn(missing_docs)]
 
@@ -26,6 +28,7 @@ pub mod baselines;
 pub mod batch;
 pub mod fmi;
 pub mod ground;
+pub mod isa;
 pub mod limits;
 pub mod physics;
 pub mod solver;

@@ -41,7 +41,7 @@ mod state_check;
 mod sweep;
 
 pub(crate) use bodies::{move_bodies, upper_cluster_step};
-use pieces::Piece;
+pub(crate) use pieces::Piece;
 pub use pieces::{
     finite_terms, same_up_to_rounding, substeps, CheckedPieces, Excitation, PieceSource, Plain,
     EVENT_TIME_TOL, FINE_H_OMEGA, FINE_MAX_STEP, MAX_EVENTS_PER_STEP,

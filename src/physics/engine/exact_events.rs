@@ -360,7 +360,9 @@ impl Simulator {
     /// stretches of at most `h_fine`; in those a chattering contact is muted for the rest of the
     /// stretch (switched at its end), and a search that cannot decide halves the stretch, down
     /// to `MAX_SPLIT_DEPTH` halvings, where the guards are muted and the peaks taken at its ends.
-    pub(super) fn exact_stretch(&mut self, t1: f64, piece: &Piece, depth: u32) {
+    /// (Run as `exact_stretch`: `crate::isa`.)
+    #[inline(always)]
+    pub(crate) fn stretch_run(&mut self, t1: f64, piece: &Piece, depth: u32) {
         let (exc, t_ref) = (&piece.exc, piece.t_ref);
         let ends_only = depth >= MAX_SPLIT_DEPTH;
         let mut muted: u32 = 0;
@@ -451,6 +453,7 @@ impl Simulator {
 
     /// The first zero over the stretch of `flow` among the guards of the
     /// mode that are not `muted`, or the guards to fire at once.
+    #[inline(always)]
     fn next_event(
         &self,
         flow: &mut Flow,
@@ -517,6 +520,7 @@ impl Simulator {
     /// cluster, the work terms are added in closed form, and the peaks are
     /// raised to their largest values over it. Fails, changing nothing, when
     /// a peak cannot be decided.
+    #[inline(always)]
     fn take_exact(
         &mut self,
         flow: &mut Flow,

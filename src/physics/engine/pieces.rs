@@ -193,7 +193,7 @@ impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for CheckedPieces<I> {
 /// One linear piece of excitation from `t_ref` to `t_end`, cut into `n`
 /// equal substeps of `h`; `i` is the next substep to take (1-based).
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Piece {
+pub(crate) struct Piece {
     pub(super) exc: Excitation,
     pub(super) t_ref: f64,
     pub(super) t_end: f64,

@@ -147,9 +147,9 @@ impl Simulator {
     /// accelerations `A_c` in the mode: a guard between two of them is
     /// linear in time over the run (the ground's terms cancel), so it holds
     /// up to its zero, found once per run. A slip whose guard holds keeps
-    /// its direction: its peak is at an end of the run.
-    #[inline(never)]
-    fn sweep_clusters<const NC: usize, const AG: bool, const RUNS: u8>(
+    /// its direction: its peak is at an end of the run. (Run as `sweep_clusters`, `crate::isa`.)
+    #[inline(always)]
+    pub(crate) fn sweep_run<const NC: usize, const AG: bool, const RUNS: u8>(
         &mut self,
         piece: &mut Piece,
         pieces: &mut impl PieceSource,
