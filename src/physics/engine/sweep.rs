@@ -77,7 +77,7 @@ impl WorkSums {
 
     /// The sums' work added to `[input, viscous]` (as [`WorkSums::flush`],
     /// the sums left as they are: a run's last use).
-    #[inline(never)]
+    #[inline(always)]
     fn add_work(&self, rows: &Rows, mass: f64, load_accel: f64, work: &mut [f64; 2]) {
         let (s, l) = (&self.products, &self.linear);
         // Both forms at once, in two lanes (each summed in its own order).
