@@ -142,7 +142,7 @@ pub(super) struct Undecided;
 /// is first needed: most searches need one). `tol` is the width below which a stretch is
 /// not split further: a sign change there is the zero, and a dip below zero
 /// and back inside it is not seen (a graze).
-#[inline]
+#[inline(always)]
 pub(super) fn first_zero(
     g: &Poly,
     [mut a, mut ga, mut da]: [f64; 3],
@@ -185,6 +185,7 @@ pub(super) fn first_zero(
 /// leaves it), to well below `tol`; the instant returned is past the zero
 /// by at most `tol`, where `g <= 0`. For a peak, `|g(x)| < near = m1 tol`
 /// with `|g'| >= m1` ends it at `x`, within `tol` of the zero.
+#[inline(always)]
 fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], [tol, near]: [f64; 2]) -> f64 {
     // The secant, or the middle from a start clamped at zero.
     let mut x = if ga > 0.0 {
