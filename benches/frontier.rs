@@ -156,7 +156,18 @@ fn main() {
     rigid.mus[0] = 10.0;
     rigid.muk[0] = 10.0;
     scenes.push(("N = 1, never slides".into(), rigid));
-    println!("{rounds} rounds of {reps} simulations, medians; floor: the exact recurrence of the bare structure");
+    // NARROW=1: the engine's baseline x86-64 copy even where AVX-512 runs.
+    if std::env::var("NARROW").is_ok_and(|v| v == "1") {
+        stacked_live_load::isa::allow_wide_registers(false);
+    }
+    let copy = if std::env::var("NARROW").is_ok_and(|v| v == "1")
+        || !stacked_live_load::isa::wide_registers_available()
+    {
+        "baseline x86-64"
+    } else {
+        "AVX-512"
+    };
+    println!("{rounds} rounds of {reps} simulations, medians; floor: the exact recurrence of the bare structure; the engine's {copy} copy");
     for (r, (label, gm)) in records.iter().enumerate() {
         println!(
             "\n{label}: {} samples at {} s",
