@@ -215,7 +215,7 @@ impl Flow {
 
     /// Whether the guard `g` is proved positive over the whole stretch
     /// from its coefficients alone (most are: no polynomial is built).
-    #[inline]
+    #[inline(always)]
     fn holds(&self, sim: &Simulator, g: &Guard) -> bool {
         match *g {
             Guard::Slip { hi, lo, sign } => {
