@@ -6,7 +6,9 @@
 mod common;
 
 use common::Rng;
-use stacked_live_load::{ground::record, isa, Outputs, Params, Settings, Simulator, Support};
+use stacked_live_load::{
+    ground::record, isa, Excitation, Outputs, Params, Settings, Simulator, Support,
+};
 
 /// A random stack of `n` blocks, mus >= muk (equal on about half of the
 /// interfaces), on the structure or on a prescribed support.
@@ -43,6 +45,33 @@ fn outputs(p: &Params, gm: &stacked_live_load::GroundMotion) -> [Outputs; 2] {
     [whole.outputs(), per_call.outputs()]
 }
 
+/// A master's communication steps of random length, each with its own `ag`
+/// and `Fext` and their slopes (each continues or jumps).
+fn master_inputs(rng: &mut Rng, duration: f64, mass: f64) -> Vec<(f64, Excitation)> {
+    let (mut t, mut ag, mut fext) = (0.0, 0.0, 0.0);
+    let mut pieces = vec![];
+    while t < duration {
+        let h = rng.uniform(0.001, 0.05);
+        let (ag_rate, fext_rate) = (rng.uniform(-40.0, 40.0), mass * rng.uniform(-20.0, 20.0));
+        if rng.next_f64() < 0.3 {
+            (ag, fext) = (rng.uniform(-3.0, 3.0), mass * rng.uniform(-2.0, 2.0));
+        }
+        pieces.push((
+            t + h,
+            Excitation {
+                ag,
+                ag_rate,
+                fext,
+                fext_rate,
+            },
+        ));
+        (t, ag, fext) = (t + h, ag + ag_rate * h, fext + fext_rate * h);
+        // Bounded inputs: a ramp turns back at 3 m/s2 (or its force).
+        (ag, fext) = (ag.clamp(-3.0, 3.0), fext.clamp(-2.0 * mass, 2.0 * mass));
+    }
+    pieces
+}
+
 #[test]
 fn the_avx512_copies_give_the_baselines_results_bit_for_bit() {
     if !isa::wide_registers_available() {
@@ -76,5 +105,21 @@ fn the_avx512_copies_give_the_baselines_results_bit_for_bit() {
             // Debug formatting prints every f64 exactly (shortest round trip).
             assert_eq!(format!("{wide:?}"), format!("{narrow:?}"), "scene {i}");
         }
+        // A master's inputs with slopes and jumps (no `Fext` on a support).
+        let mut inputs = master_inputs(&mut rng, 6.0, p.mp);
+        if p.support == Support::Prescribed {
+            inputs
+                .iter_mut()
+                .for_each(|(_, e)| (e.fext, e.fext_rate) = (0.0, 0.0));
+        }
+        let run = |wide: bool| {
+            isa::allow_wide_registers(wide);
+            let mut sim = Simulator::new(p, &Settings::default()).unwrap();
+            sim.advance_pieces(inputs.iter().copied()).unwrap();
+            format!("{:?}", sim.outputs())
+        };
+        let (wide, narrow) = (run(true), run(false));
+        isa::allow_wide_registers(true);
+        assert_eq!(wide, narrow, "scene {i}, a master's inputs");
     }
 }
