@@ -11,6 +11,7 @@ use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 static WIDE_ALLOWED: AtomicBool = AtomicBool::new(true);
 
 /// Whether this processor has AVX-512 (F and VL; std caches the detection).
+#[inline]
 pub fn wide_registers_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     return std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl");
