@@ -156,17 +156,7 @@ fn main() {
     rigid.mus[0] = 10.0;
     rigid.muk[0] = 10.0;
     scenes.push(("N = 1, never slides".into(), rigid));
-    // NARROW=1: the engine's baseline x86-64 copy even where AVX-512 runs.
-    if std::env::var("NARROW").is_ok_and(|v| v == "1") {
-        stacked_live_load::isa::allow_wide_registers(false);
-    }
-    let copy = if std::env::var("NARROW").is_ok_and(|v| v == "1")
-        || !stacked_live_load::isa::wide_registers_available()
-    {
-        "baseline x86-64"
-    } else {
-        "AVX-512"
-    };
+    let copy = common::engine_copy_from_env();
     println!("{rounds} rounds of {reps} simulations, medians; floor: the exact recurrence of the bare structure; the engine's {copy} copy");
     for (r, (label, gm)) in records.iter().enumerate() {
         println!(

@@ -9,10 +9,7 @@ use stacked_live_load::{ground::record, physics::sdof, Settings, Simulator};
 use std::hint::black_box;
 
 fn main() {
-    // NARROW=1: the baseline x86-64 code even where AVX-512 runs.
-    if std::env::var("NARROW").is_ok_and(|v| v == "1") {
-        stacked_live_load::isa::allow_wide_registers(false);
-    }
+    common::engine_copy_from_env();
     let args: Vec<String> = std::env::args().collect();
     let scene = args.get(1).map_or("n8", |s| s.as_str());
     let rec = args.get(2).map_or("shipped", |s| s.as_str());

@@ -9,10 +9,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 fn main() {
-    // NARROW=1: the baseline x86-64 code even where AVX-512 runs.
-    if std::env::var("NARROW").is_ok_and(|v| v == "1") {
-        stacked_live_load::isa::allow_wide_registers(false);
-    }
+    common::engine_copy_from_env();
     let rounds: usize = std::env::var("ROUNDS")
         .ok()
         .map_or(11, |s| s.parse().unwrap());

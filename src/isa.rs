@@ -14,9 +14,11 @@ static WIDE_ALLOWED: AtomicBool = AtomicBool::new(true);
 #[inline]
 pub fn wide_registers_available() -> bool {
     #[cfg(target_arch = "x86_64")]
-    return std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl");
-    #[allow(unreachable_code)]
-    false
+    let available =
+        std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl");
+    #[cfg(not(target_arch = "x86_64"))]
+    let available = false;
+    available
 }
 
 /// Lets the engine use AVX-512 where the processor has it (the default), or
@@ -26,10 +28,9 @@ pub fn allow_wide_registers(allowed: bool) {
     WIDE_ALLOWED.store(allowed, Relaxed);
 }
 
-/// Whether the AVX-512 copies run.
-#[cfg(target_arch = "x86_64")]
+/// Whether the AVX-512 copies run (allowed, and the processor has it).
 #[inline(always)]
-pub(crate) fn wide_registers() -> bool {
+pub fn wide_registers() -> bool {
     WIDE_ALLOWED.load(Relaxed) && wide_registers_available()
 }
 

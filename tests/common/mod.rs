@@ -1064,6 +1064,19 @@ pub fn graded_stack_static_above_kinetic() -> stacked_live_load::Params {
     p
 }
 
+/// For the benches and timing examples: `NARROW=1` runs the engine's
+/// baseline x86-64 copy even where its AVX-512 copy could
+/// (`stacked_live_load::isa`); returns the name of the copy that runs.
+pub fn engine_copy_from_env() -> &'static str {
+    let narrow = std::env::var("NARROW").is_ok_and(|v| v == "1");
+    stacked_live_load::isa::allow_wide_registers(!narrow);
+    if stacked_live_load::isa::wide_registers() {
+        "AVX-512"
+    } else {
+        "baseline x86-64"
+    }
+}
+
 /// Median of timings.
 pub fn median(mut x: Vec<f64>) -> f64 {
     x.sort_by(|a, b| a.total_cmp(b));
