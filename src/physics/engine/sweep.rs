@@ -393,7 +393,7 @@ impl Simulator {
                 let cf = load_accel + rule.accel(inp.ag, inp.fext);
                 let rates = [w2, cm, cf, fext_rate_m];
                 let (ends, fourth) = ([u1, v1, a1], [s3, map.five_over_three * s3]);
-                if raise_substep_peaks(peaks, z, map.h, rates, map.degree, ends, fourth).is_err() {
+                if raise_substep_peaks(peaks, z, hs, rates, map.degree, ends, fourth).is_err() {
                     break;
                 }
             }
