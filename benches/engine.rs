@@ -22,8 +22,10 @@ fn record_20s() -> GroundMotion {
 }
 
 fn scene(n: usize) -> Params {
-    let mut p = Params::default();
-    p.n_blocks = n;
+    let mut p = Params {
+        n_blocks: n,
+        ..Params::default()
+    };
     for j in 2..n {
         p.alpha[j] = 0.25 / j as f64;
         p.mus[j] = 0.05;

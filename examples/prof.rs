@@ -3,7 +3,7 @@
 //! `cargo run --release --example prof -- SCENE RECORD` with SCENE one of
 //! n0 n2 n8 n8s percall onecall floor, RECORD shipped | b1 | b2 | c1 | c2 | c3 | a path.
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code, unused_imports)]
+#[allow(unused_imports)]
 mod common;
 use stacked_live_load::{ground::record, physics::sdof, Settings, Simulator};
 use std::hint::black_box;

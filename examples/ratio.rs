@@ -2,7 +2,7 @@
 //! `cargo run --release --example ratio -- n8 n2 percall onecall` (ROUNDS, REPS;
 //! RECORDS=path:path other records, their first 20 s, or c1 c2 c3).
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code, unused_imports)]
+#[allow(unused_imports)]
 mod common;
 use stacked_live_load::{ground::record, physics::sdof, Settings, Simulator};
 use std::hint::black_box;
@@ -57,7 +57,7 @@ fn main() {
                 "n8" => common::graded_stack(8),
                 _ => common::graded_stack(2),
             };
-            let pieces = common::record_pieces(&gm);
+            let pieces = common::record_pieces(gm);
             let run = |way: &str| match way {
                 "percall" => {
                     let mut sim = Simulator::new(&p, &Settings::default()).unwrap();

@@ -8,8 +8,10 @@ fn main() {
         .nth(1)
         .map(|s| s.parse().unwrap())
         .unwrap_or(2);
-    let mut p = Params::default();
-    p.n_blocks = n;
+    let mut p = Params {
+        n_blocks: n,
+        ..Params::default()
+    };
     // RIGID=1: the lowest block never slides (mu 10), to price a switch
     // against the same run with it sliding (as the frontier bench does).
     if std::env::var("RIGID").is_ok_and(|v| v == "1") {

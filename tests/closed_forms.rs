@@ -24,8 +24,10 @@ fn fine(p: &Params) -> Simulator {
 }
 
 fn scene(n: usize, mu: f64) -> Params {
-    let mut p = Params::default();
-    p.n_blocks = n;
+    let mut p = Params {
+        n_blocks: n,
+        ..Params::default()
+    };
     for j in 0..n {
         p.alpha[j] = 0.1 + 0.15 * j as f64;
         p.mus[j] = mu;
@@ -99,8 +101,10 @@ fn a_stack_whose_upper_interface_cannot_slip_is_the_single_block() {
     let mut stack = Params::default();
     stack.mus[1] = 1e6;
     stack.muk[1] = 1e6;
-    let mut single = Params::default();
-    single.n_blocks = 1;
+    let mut single = Params {
+        n_blocks: 1,
+        ..Params::default()
+    };
     single.alpha[0] = stack.alpha[0] + stack.alpha[1];
     let (mut a, mut b) = (sim(&stack), sim(&single));
     let (mut ua, mut ub) = (vec![], vec![]);

@@ -14,15 +14,19 @@ fn with(p: &Params, method: Method, max_step: f64) -> Simulator {
 /// Scenes that exercise stick-slip at every interface.
 fn scenes() -> Vec<(&'static str, Params)> {
     let default = Params::default();
-    let mut single = Params::default();
-    single.n_blocks = 1;
+    let mut single = Params {
+        n_blocks: 1,
+        ..Params::default()
+    };
     single.mus[0] = 0.2;
     single.muk[0] = 0.2;
     let mut static_kinetic = Params::default();
     static_kinetic.mus[..2].copy_from_slice(&[0.15, 0.08]);
     static_kinetic.muk[..2].copy_from_slice(&[0.1, 0.05]);
-    let mut four = Params::default();
-    four.n_blocks = 4;
+    let mut four = Params {
+        n_blocks: 4,
+        ..Params::default()
+    };
     four.alpha[..4].copy_from_slice(&[0.3, 0.2, 0.1, 0.05]);
     four.mus[..4].copy_from_slice(&[0.15, 0.1, 0.12, 0.06]);
     four.muk[..4].copy_from_slice(&[0.12, 0.1, 0.08, 0.05]);
@@ -174,7 +178,8 @@ fn the_default_is_exact_at_any_max_step_and_step_end_switching_first_order() {
         let error = history_error(&p, &gm, &exact, Method::EventLocated, h) / exact.peak_u0;
         assert!(error < 1e-10, "default at maxStep {h}: {error:.2e}");
     }
-    for (method, lo, hi) in [(Method::StepEnd, 0.6, 1.6)] {
+    {
+        let (method, lo, hi) = (Method::StepEnd, 0.6, 1.6);
         let errors: Vec<f64> = steps
             .iter()
             .map(|&h| history_error(&p, &gm, &exact, method, h))
@@ -192,8 +197,10 @@ fn eight_block_stack_under_a_strong_record() {
     // Issue #2: N = 8 under PGA 0.6 g runs to the end with a consistent mode at
     // every event, and matches the exact reference.
     let gm = scaled_to_pga(&read_shared("Rinaldi228.AT2", 9.81), 0.6 * 9.81);
-    let mut p = Params::default();
-    p.n_blocks = 8;
+    let mut p = Params {
+        n_blocks: 8,
+        ..Params::default()
+    };
     for j in 0..8 {
         p.alpha[j] = 0.05 + 0.04 * ((j * 5) % 8) as f64;
         // Friction falls upwards, so that every interface gets to slip.

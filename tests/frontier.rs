@@ -15,10 +15,12 @@ use stacked_live_load::*;
 /// A random stack of `n` blocks: masses, friction falling upwards on
 /// average so that every interface gets to slip, μs = μk or μs > μk.
 fn random_scene(rng: &mut Rng, n: usize, tp: f64, static_above_kinetic: bool) -> Params {
-    let mut p = Params::default();
-    p.n_blocks = n;
-    p.tp = tp;
-    p.zeta = rng.uniform(0.02, 0.08);
+    let mut p = Params {
+        n_blocks: n,
+        tp,
+        zeta: rng.uniform(0.02, 0.08),
+        ..Params::default()
+    };
     for j in 0..n {
         p.alpha[j] = rng.uniform(0.05, 0.4);
         p.muk[j] = rng.uniform(0.03, 0.15) * (1.0 - 0.5 * j as f64 / 8.0);
@@ -101,9 +103,11 @@ fn bare_structure_is_exact_on_broadband_records() {
     for _ in 0..4 {
         let tp = 0.05 * 100f64.powf(rng.next_f64());
         let gm = broadband_record(&mut rng, 10.0, 0.005);
-        let mut p = Params::default();
-        p.n_blocks = 0;
-        p.tp = tp;
+        let p = Params {
+            n_blocks: 0,
+            tp,
+            ..Params::default()
+        };
         let exact = Exact::new(&p).run(&gm, 16);
         let mut s = Simulator::new(&p, &Settings::default()).unwrap();
         let (mut residual, mut input) = (0.0f64, 0.0f64);

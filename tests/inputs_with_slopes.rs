@@ -138,6 +138,7 @@ fn compare(sim: &Simulator, exact: &ExactResult, label: &str) -> f64 {
 
 #[test]
 fn random_scenes_with_ramps_and_jumps_of_both_inputs_match_the_exact_reference() {
+    #[allow(clippy::unusual_byte_groupings)] // "slopes", issue 21
     let mut rng = Rng(0x5107e5_21);
     let mut worst = 0.0f64;
     let mut switches = 0;
@@ -267,6 +268,7 @@ fn the_fmu_with_a_record_and_inputs_with_derivatives_matches_the_exact_reference
     // accepted at the end.
     use stacked_live_load::fmi::instance::Status;
     use stacked_live_load::fmi::variables::Id;
+    #[allow(clippy::unusual_byte_groupings)] // issue 21
     let mut rng = Rng(0xf00d_21);
     let dir = std::env::temp_dir().join(format!("sll_slopes_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

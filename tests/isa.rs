@@ -2,7 +2,6 @@
 //! baseline x86-64 code: the same IEEE operations in the same order, so every
 //! output must agree bit for bit. On a processor without AVX-512 both runs
 //! take the baseline code (the test says so and still runs them).
-#[allow(dead_code)]
 mod common;
 
 use common::Rng;

@@ -109,6 +109,8 @@ fn pgs(case: &Case) -> Vec<f64> {
     let sys = &case.sys;
     let n = sys.n;
     let mut f = vec![0.0; n + 1];
+    // j is the interface: a bit of `zero` and an entry of four arrays.
+    #[allow(clippy::needless_range_loop)]
     for j in 1..=n {
         if case.req.zero & (1 << j) == 0 {
             f[j] = -sys.muk[j] * sys.normal[j] * case.req.mode.contact[j].slip_sign();
@@ -280,8 +282,10 @@ fn an_interface_at_its_static_limit_breaks() {
     // One block on a structure pushed so that the stick force is just above
     // mus N: the resolver must let it slip when told it must break, and the
     // slip direction must oppose the force.
-    let mut p = Params::default();
-    p.n_blocks = 1;
+    let mut p = Params {
+        n_blocks: 1,
+        ..Params::default()
+    };
     p.mus[0] = 0.3;
     p.muk[0] = 0.2;
     let sys = System::new(&p).unwrap();
@@ -432,8 +436,10 @@ fn a_breaking_stick_that_another_slip_relieves_is_a_rival() {
     // instead leaves it stuck well inside its capacity, a second solution
     // of the contact law (only the state just left, at the limit, is no
     // rival). Two blocks, muk2 in [muk1, mus1): |F1| = 0.92 mus N there.
-    let mut p = Params::default();
-    p.n_blocks = 2;
+    let mut p = Params {
+        n_blocks: 2,
+        ..Params::default()
+    };
     (p.mus[0], p.muk[0], p.mus[1], p.muk[1]) = (0.3, 0.2, 0.4, 0.25);
     let sys = System::new(&p).unwrap();
     let limit = sys.mus[1] * sys.normal[1];
@@ -461,8 +467,10 @@ fn a_breaking_stick_that_another_slip_relieves_is_a_rival() {
 
 #[test]
 fn clusters_follow_the_stuck_interfaces() {
-    let mut p = Params::default();
-    p.n_blocks = 3;
+    let p = Params {
+        n_blocks: 3,
+        ..Params::default()
+    };
     let sys = System::new(&p).unwrap();
     let mut mode = Mode::all_stuck(&sys);
     mode.contact[2] = Contact::SlipForward;

@@ -97,8 +97,8 @@ struct Worst {
 /// The checks after every communication step: without mobility the
 /// support does not move relative to itself and its acceleration is `a_s`;
 /// with a mobility `m_b` it is a floor of mass `1 / m_b` that the rest of
-/// the master's model pushes with `a_s / m_b - F_ref`, `F_ref = -M_ref a_s
-/// + s_ref` from the outputs at the step's start (the reference mode), so
+/// the master's model pushes with `a_s / m_b - F_ref`, `F_ref = -M_ref a_s +
+/// s_ref` from the outputs at the step's start (the reference mode), so
 /// `(apAbs - a_s) / m_b = floor_force - F_ref` (1e-12 of the forces'
 /// scale); the floor force balances the blocks' momentum
 /// (`floor_force = -Σ m_j a_j`, 1e-12 of `Σ m_j |a_j|`); `sliding_force =
@@ -1032,9 +1032,12 @@ fn cosimulate(
         stack.advance(target, &exc).unwrap();
         let ts = stack.first_switch();
         // A switch at the step's start would be one the previous step's
-        // end left undone (the stack settles its switches there).
+        // end left undone (the stack settles its switches there). NaN (no
+        // switch located) passes.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        let not_at_start = !(ts <= t);
         assert!(
-            !(ts <= t),
+            not_at_start,
             "H {h}: a switch at the start of the step at {t}"
         );
         let t1 = if ts.is_finite() && ts > t && ts < target {
@@ -1185,6 +1188,8 @@ fn a_cosimulation_with_mobility_one_over_mp_converges_to_the_monolithic_solution
     // Second order: every error falls by 2.5 or more at every halving
     // (measured 3.2 to 5.1).
     for pair in errors.windows(2) {
+        // k is the error: an entry of both halvings' rows.
+        #[allow(clippy::needless_range_loop)]
         for k in 0..4 {
             let (coarse, fine) = (pair[0][k], pair[1][k]);
             assert!(fine < coarse / 2.5, "error {k}: {coarse:.2e} -> {fine:.2e}");
@@ -1265,7 +1270,7 @@ fn mb0_scenario_bits() -> Vec<u64> {
                 [o.ub[j], o.vb[j], o.slip[j], o.peak_slip[j], o.ab_abs[j]].map(f64::to_bits),
             );
         }
-        bits.push(o.n_events as u64);
+        bits.push(o.n_events);
     }
     bits
 }

@@ -14,8 +14,10 @@ use std::f64::consts::PI;
 fn regularized_friction_has_an_error_floor_that_scales_with_eps() {
     // Oracle: the exact event-driven reference (mus = muk). RESEARCH.md §2
     // measured peak errors of 5.4e-3, 7.2e-4, 9.1e-5 for eps = 1e-2 ... 1e-4 m/s.
-    let mut p = Params::default();
-    p.n_blocks = 1;
+    let mut p = Params {
+        n_blocks: 1,
+        ..Params::default()
+    };
     p.alpha[0] = 0.5;
     let gm = broadband(10.0, 0.005, 0.4 * 9.81);
     let exact = Exact::new(&p).run(&gm, 16).peak_u0;
@@ -62,10 +64,12 @@ fn regularized_friction_has_an_error_floor_that_scales_with_eps() {
 /// Peak |u| of a bare undamped structure kicked by one step of ground
 /// acceleration and then left free for 300 steps of plain RK4 at h omega = theta.
 fn free_vibration_growth(theta: f64) -> f64 {
-    let mut p = Params::default();
-    p.n_blocks = 0;
-    p.zeta = 0.0;
-    p.tp = 1.0;
+    let p = Params {
+        n_blocks: 0,
+        zeta: 0.0,
+        tp: 1.0,
+        ..Params::default()
+    };
     let h = theta / (2.0 * PI / p.tp);
     let mut s = RegularizedSimulator::new(&p, 1e-3, h).unwrap();
     s.advance(
@@ -101,8 +105,10 @@ fn plain_rk4_diverges_just_above_h_omega_2_83_and_not_below() {
 fn the_event_engine_bounds_its_own_step_whatever_the_communication_step() {
     // A stiff structure (Tp 0.01 s) driven with 1 s communication steps and
     // max_step asked at 10 s: the automatic bound 2.5 / omega keeps RK4 stable.
-    let mut p = Params::default();
-    p.tp = 0.01;
+    let p = Params {
+        tp: 0.01,
+        ..Params::default()
+    };
     let coarse = Settings {
         max_step: 10.0,
         ..Settings::default()

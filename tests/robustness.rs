@@ -92,8 +92,10 @@ fn defaults_are_valid_and_bad_fields_are_named() {
     let e = p.validate().unwrap_err();
     assert_eq!(e.field, "muk[1]");
     assert!(e.to_string().contains("<= mus"));
-    let mut p = Params::default();
-    p.zeta = f64::NAN;
+    let p = Params {
+        zeta: f64::NAN,
+        ..Params::default()
+    };
     assert_eq!(p.validate().unwrap_err().field, "zeta");
     for (field, value) in [("Tp", 5e-324), ("Tp", 1e-9), ("mp", 1e300), ("g", 0.0)] {
         let e = check_scalar(field, value).unwrap_err();
@@ -104,8 +106,10 @@ fn defaults_are_valid_and_bad_fields_are_named() {
     assert!(check_scalar("recordScale", 1e200).is_err());
     assert!(check_scalar("recordScale", -2.0).is_ok());
     assert!(check_scalar("mus[3]", 1e6).is_ok());
-    let mut p = Params::default();
-    p.n_blocks = 9;
+    let p = Params {
+        n_blocks: 9,
+        ..Params::default()
+    };
     assert_eq!(p.validate().unwrap_err().field, "nBlocks");
     // Entries beyond nBlocks are not used and not checked.
     let mut p = Params::default();

@@ -34,6 +34,10 @@ use std::f64::consts::PI;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
+/// A mode's propagator, kept while the mode and the step stay the same:
+/// the mode, the step, `exp(H step)`, the generator `H` and its forcing.
+type PropagatorCache = (Mode, f64, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>);
+
 mod child;
 pub mod second;
 #[allow(unused_imports)]
@@ -424,7 +428,7 @@ impl Exact {
             e_input: 0.0,
             e_friction: vec![0.0; n],
         };
-        let mut cache: Option<(Mode, f64, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)> = None;
+        let mut cache: Option<PropagatorCache> = None;
         // Relative displacement of each stuck pair, fixed when it stuck.
         let mut offsets = vec![0.0; m];
         let mut t_a = t_start;
@@ -658,6 +662,8 @@ impl Exact {
                 && z[m + j] == z[m + j - 1]
                 && c.slip_sign() * (a_now[j] - a_now[j - 1]) >= 0.0
         };
+        // j is the interface: the guard, the closure and two arrays take it.
+        #[allow(clippy::needless_range_loop)]
         for j in 1..=n {
             if j == located || (self.guard(mode, z, j) <= 0.0 && !goes_on(j)) {
                 match mode.contact[j] {
@@ -669,6 +675,8 @@ impl Exact {
         }
         // Momentum-average velocity over groups linked by stuck or joined interfaces.
         let mut start = 0;
+        // j runs one past the last interface (m, a group's end), not over `joined`.
+        #[allow(clippy::needless_range_loop)]
         for j in 1..=m {
             if j < m && (mode.is_stuck(j) || joined[j]) {
                 continue;
@@ -1036,8 +1044,10 @@ pub fn compare_on_support(o: &stacked_live_load::Outputs, exact: &ExactResult, l
 /// (equal coefficients make a riding block's stick force exactly mus N,
 /// where stuck and sliding are both consistent).
 pub fn graded_stack(n: usize) -> stacked_live_load::Params {
-    let mut p = stacked_live_load::Params::default();
-    p.n_blocks = n;
+    let mut p = stacked_live_load::Params {
+        n_blocks: n,
+        ..Default::default()
+    };
     for j in 2..n {
         p.alpha[j] = 0.25 / j as f64;
         p.mus[j] = 0.05 - 0.004 * (j - 1) as f64;
