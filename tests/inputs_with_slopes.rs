@@ -82,7 +82,8 @@ fn excitation(piece: &InputPiece) -> Excitation {
 
 /// Drives the engine one communication step at a time and checks, after
 /// every step, that the saved state is accepted and that friction work
-/// never falls; returns the engine at the end.
+/// never falls, not even by an ulp (the engine books every stretch's work
+/// as a non-negative amount); returns the engine at the end.
 fn drive(p: &Params, pieces: &[InputPiece], label: &str) -> Simulator {
     let mut sim = Simulator::new(p, &Settings::default()).unwrap();
     let mut friction = vec![0.0f64; p.n_blocks];
@@ -92,7 +93,7 @@ fn drive(p: &Params, pieces: &[InputPiece], label: &str) -> Simulator {
         for (j, before) in friction.iter_mut().enumerate() {
             let now = o.e_friction_of[j];
             assert!(
-                now >= *before - 1e-12 * before.abs().max(1e-9),
+                now >= *before,
                 "{label}: Efriction[{}] fell from {before} to {now} at t = {}",
                 j + 1,
                 o.t
@@ -134,6 +135,39 @@ fn compare(sim: &Simulator, exact: &ExactResult, label: &str) -> f64 {
         "{label}: energy residual {residual:.2e} of the input"
     );
     worst
+}
+
+#[test]
+fn friction_work_never_falls_nor_goes_negative_even_where_frictions_tie() {
+    // Equal frictions on neighbouring interfaces make switches that cross
+    // at the same instant up to rounding (the motion is then not unique,
+    // so no reference is compared): a stretch that ends where a slip stops
+    // computed its slip a few ulps backwards, and Efriction fell by up to
+    // 1.5e-15 J or went negative (-1e-21 to -1e-16 J) in about one scene
+    // in ten before the work was booked non-negative (found by a fuzz of
+    // 12 000 scenes). Expected: every interface's Efriction >= 0 and never
+    // below its value after the previous step, exactly (`drive`).
+    let mut rng = Rng(0x7e_5ca1e5);
+    let mut switches = 0;
+    for case in 0..120 {
+        let n_blocks = 2 + case % 7;
+        let mut p = random_scene(&mut rng, n_blocks);
+        for j in 0..n_blocks {
+            if rng.next_f64() < 0.35 {
+                p.muk[j] = p.mus[j];
+            }
+            if j > 0 && rng.next_f64() < 0.4 {
+                (p.mus[j], p.muk[j]) = (p.mus[j - 1], p.muk[j - 1]);
+            }
+        }
+        let pieces = random_inputs(&mut rng, &p, 1.0);
+        let label = format!("case {case} ({n_blocks} blocks, {} steps)", pieces.len());
+        let sim = drive(&p, &pieces, &label);
+        let o = sim.outputs();
+        assert!(o.e_friction_of.iter().all(|&e| e >= 0.0), "{label}");
+        switches += sim.stats().events;
+    }
+    assert!(switches > 1000, "only {switches} switches in 120 scenes");
 }
 
 #[test]
@@ -328,10 +362,7 @@ fn the_fmu_with_a_record_and_inputs_with_derivatives_matches_the_exact_reference
             t = step.t_end;
             let mut ef = [0.0];
             assert_eq!(inst.get_real(&[Id::Efriction.vr()], &mut ef), Status::Ok);
-            assert!(
-                ef[0] >= friction - 1e-12 * friction.max(1e-9),
-                "case {case}"
-            );
+            assert!(ef[0] >= friction, "case {case}: Efriction fell");
             friction = ef[0];
         }
         let exact = Exact::new(&p).run_pieces(0.0, &record_plus_steps(&record, &steps), 16);

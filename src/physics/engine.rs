@@ -40,7 +40,7 @@ mod saved_state;
 mod state_check;
 mod sweep;
 
-pub(crate) use bodies::{move_bodies, upper_cluster_step};
+pub(crate) use bodies::{friction_work, move_bodies, upper_cluster_step};
 pub(crate) use pieces::Piece;
 pub use pieces::{
     finite_terms, same_up_to_rounding, substeps, CheckedPieces, Excitation, PieceSource, Plain,

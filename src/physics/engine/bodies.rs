@@ -27,6 +27,12 @@ pub(crate) fn upper_cluster_step(
     [du, v_end, work]
 }
 
+/// Friction's work (the default's) as `force` moves through `slip`: never negative (a slip
+/// that stops where it ends can come out a few ulps back).
+pub(crate) fn friction_work(force: f64, slip: f64) -> f64 {
+    (-force * slip).max(0.0)
+}
+
 /// Moves every body with its cluster: the structure to `u0`, the other
 /// bodies of its cluster by keeping their offset from it (so a body stuck
 /// at zero slip stays at exactly zero slip), those of the other clusters by

@@ -584,7 +584,7 @@ impl Simulator {
             let (j, hi, lo) = (m.j, m.hi, m.lo);
             let slip0 = self.u[j] - self.u[j - 1];
             let slip1 = slip0 + du[hi] - du[lo];
-            e_friction[j] -= d.slip_force[j] * (du[hi] - du[lo]);
+            e_friction[j] += friction_work(d.slip_force[j], du[hi] - du[lo]);
             // A slip whose guard (its rate, signed) is watched (not muted)
             // keeps its direction over the stretch: it peaks at an end.
             let watched = d.changing_guards & !muted & (1 << j) != 0;

@@ -4,7 +4,7 @@
 //! - no guard changes sign: a guard `g` positive at both ends stays above
 //!   their linear interpolation minus `h²/8 sup|g''|`, and `sup|g''|` is
 //!   bounded from the substep's start state by the map's derivative bounds
-//!   (`ExactMap::sup_v`), so `min(g(0), g(h)) > h²/8 sup|g''|` excludes a
+//!   (`ExactMap::sup_v_abs`), so `min(g(0), g(h)) > h²/8 sup|g''|` excludes a
 //!   crossing, a double one included; where that is too coarse, Taylor's
 //!   bounds from both ends ([`stays_positive`]);
 //! - no peak is missed: `|y|` is bounded by the cubic Hermite interpolant

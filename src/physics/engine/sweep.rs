@@ -29,7 +29,7 @@ use super::proofs::{
     energy_run, in_band_proved, linear_guard_lasts, peaks_quick, raise_peak_proved,
     slip_guard_proved, structure_peaks_proved,
 };
-use super::{move_bodies, Excitation, Piece, PieceSource, Simulator};
+use super::{friction_work, move_bodies, Excitation, Piece, PieceSource, Simulator};
 use crate::physics::hermite;
 use crate::physics::params::MAX_BODIES;
 
@@ -454,7 +454,7 @@ impl Simulator {
             for m in 0..NC - 1 {
                 let j = iface[m];
                 let (start, end) = (slip_start[m], slip[m]);
-                self.e_friction[j] -= d.slip_force[j] * (end - start);
+                self.e_friction[j] += friction_work(d.slip_force[j], end - start);
                 let peak = &mut self.peak_slip[j];
                 if slip_sign[m] != 0.0 {
                     // Its guard held: it kept its direction.
