@@ -488,6 +488,9 @@ impl Exact {
                 continue;
             }
             let mut tau = 0.0;
+            // A bound instead of a hang: where two frictions are equal the
+            // reference can switch back and forth with no time passing.
+            let mut switches_here = 0;
             while tau < len {
                 let delta = (len - tau) / sub as f64;
                 let fresh =
@@ -591,6 +594,12 @@ impl Exact {
                             }
                         }
                         res.events += 1;
+                        switches_here += 1;
+                        assert!(
+                            switches_here < 10_000,
+                            "reference: {switches_here} switches in one piece by t = {}",
+                            t_a + tau
+                        );
                         res.event_times.push(t_a + tau);
                         let abs_u0 = z[0].abs();
                         res.peak_u0 = res.peak_u0.max(abs_u0);
