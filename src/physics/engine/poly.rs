@@ -187,6 +187,8 @@ pub(super) fn first_zero(
 /// with `|g'| >= m1` ends it at `x`, within `tol` of the zero.
 #[inline(always)]
 fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], [tol, near]: [f64; 2]) -> f64 {
+    // Newton's last step, and how far past its zero a switch is placed.
+    let past = 1e-3 * tol;
     // The secant, or the middle from a start clamped at zero.
     let mut x = if ga > 0.0 {
         a + ga / (ga - gb) * (b - a)
@@ -205,18 +207,17 @@ fn refine(g: &Poly, [mut a, ga]: [f64; 2], [mut b, gb]: [f64; 2], [tol, near]: [
         } else if gx < 0.0 {
             b = x;
         } else {
-            return (x + 1e-3 * tol).min(b);
+            return (x + past).min(b);
         }
         let mut next = x - gx / dx;
         if !(next > a && next < b) {
             next = 0.5 * (a + b);
         }
-        if (next - x).abs() <= 1e-3 * tol {
-            // Just past the zero (the last step's size), where the guard has changed sign and one
-            // reaching zero at the same instant up to rounding (equal frictions) fires with it;
-            // no further: the motion up to there runs in the old mode (half `tol` past, 5e-13 s,
-            // was the largest error left against the exact reference).
-            return (next + 1e-3 * tol).min(b);
+        if (next - x).abs() <= past {
+            // Just past the zero, where the guard has changed sign and one reaching zero at the
+            // same instant up to rounding (equal frictions) fires with it; no further: the motion
+            // up to there runs in the old mode (half `tol`, 5e-13 s, was the largest error left).
+            return (next + past).min(b);
         }
         x = next;
     }
