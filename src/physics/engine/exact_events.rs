@@ -325,16 +325,14 @@ impl Flow {
 /// muted and its peaks taken at its ends (a stretch of `h_fine / 4096`).
 const MAX_SPLIT_DEPTH: u32 = 12;
 
-/// [`raise_peak_exact`], or the ends only (`ends_only`: a stretch at the
+/// [`raise_peak_exact`] up to `s` within `tol`, or the ends only (`ends_only`: a stretch at the
 /// deepest split).
 fn raise_peak_over(
     peak: &mut f64,
     y: &Poly,
     rate: Option<&Poly>,
     ends: [f64; 2],
-    s: f64,
-    tol: f64,
-    ends_only: bool,
+    (s, tol, ends_only): (f64, f64, bool),
 ) -> Result<(), Undecided> {
     if ends_only {
         *peak = peak.max(y.c[0].abs()).max(ends[0].abs());
@@ -543,32 +541,20 @@ impl Simulator {
         // between two upper clusters a slip is quadratic in time and the
         // cubic through the ends is exact.
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
-        let peak_tol = tol.max(PEAK_TOL);
+        let how = (s, tol.max(PEAK_TOL), ends_only);
         raise_peak_over(
             &mut peak_u0,
             &flow.u,
             Some(&flow.v),
             [u0, flow.u_spread],
-            s,
-            peak_tol,
-            ends_only,
+            how,
         )?;
         let a_start = flow.accel_start;
         peak_a0 = peak_a0.max(a_start.abs()).max(accel_end.abs());
         if a_start.abs() + flow.accel_spread_bound > peak_a0 {
             let (accel, spread) = flow.accel();
-            raise_peak_over(
-                &mut peak_a0,
-                accel,
-                None,
-                [accel_end, spread],
-                s,
-                peak_tol,
-                ends_only,
-            )?;
+            raise_peak_over(&mut peak_a0, accel, None, [accel_end, spread], how)?;
         }
-        // (Copies, kept only if every peak is decided.)
-        let (mut peak_slip, mut e_friction) = (self.peak_slip, self.e_friction);
         let (mut du, mut v_end) = ([0.0; MAX_BODIES], [0.0; MAX_BODIES]);
         let mut upper_work = 0.0;
         for c in 1..d.n_clusters {
@@ -579,25 +565,34 @@ impl Simulator {
             upper_work += work;
         }
         (du[0], v_end[0]) = (u0 - u0_start, v0);
+        // A slip whose guard (its rate, signed) is watched (not muted: never a free interface)
+        // keeps its direction over the stretch: it peaks at an end. The others' peaks can fail:
+        // taken first, in copies (no copy of every slip's peak and work per stretch).
+        let (watched, mut raised) = (d.changing_guards & !muted, [0.0; MAX_BODIES]);
+        let mut unwatched = self.mode.cluster_ends() & self.sys.interfaces() & !watched;
+        while unwatched != 0 {
+            let j = unwatched.trailing_zeros() as usize;
+            unwatched &= unwatched - 1;
+            let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
+            let slip0 = self.u[j] - self.u[j - 1];
+            let vrel = [self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]];
+            let ends = [[slip0, slip0 + du[hi] - du[lo]], vrel];
+            raised[j] = self.peak_slip[j];
+            let m = Moving { j, hi, lo };
+            self.raise_unwatched_slip(&mut raised[j], flow, m, ends, how)?;
+        }
         // Friction's work: the constant force times the slip.
         for m in &d.moving[..d.n_moving] {
             let (j, hi, lo) = (m.j, m.hi, m.lo);
             let slip0 = self.u[j] - self.u[j - 1];
             let slip1 = slip0 + du[hi] - du[lo];
-            e_friction[j] += friction_work(d.slip_force[j], du[hi] - du[lo]);
-            // A slip whose guard (its rate, signed) is watched (not muted)
-            // keeps its direction over the stretch: it peaks at an end.
-            let watched = d.changing_guards & !muted & (1 << j) != 0;
-            if watched && self.mode.contact[j] != Contact::Free {
-                peak_slip[j] = peak_slip[j].max(slip0.abs()).max(slip1.abs());
+            self.e_friction[j] += friction_work(d.slip_force[j], du[hi] - du[lo]);
+            let peak = self.peak_slip[j].max(slip0.abs()).max(slip1.abs());
+            self.peak_slip[j] = if watched & (1 << j) != 0 {
+                peak
             } else {
-                let ends = [
-                    [slip0, slip1],
-                    [self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]],
-                ];
-                let peak = &mut peak_slip[j];
-                self.raise_unwatched_slip(peak, flow, *m, ends, [s, peak_tol], ends_only)?;
-            }
+                raised[j]
+            };
         }
 
         // Work: input `∫ (Fext - m ag) v = m (q0 Δu + p' (τ u(τ) - ∫u))`,
@@ -617,7 +612,6 @@ impl Simulator {
         self.e_viscous += viscous;
         self.peak_u0 = peak_u0;
         self.peak_a0 = peak_a0;
-        (self.peak_slip, self.e_friction) = (peak_slip, e_friction);
         self.t += tau;
         self.stats.steps += 1;
         Ok(())
@@ -635,8 +629,7 @@ impl Simulator {
         flow: &Flow,
         m: Moving,
         [[slip0, slip1], [vrel0, vrel1]]: [[f64; 2]; 2],
-        [s, peak_tol]: [f64; 2],
-        ends_only: bool,
+        how: (f64, f64, bool),
     ) -> Result<(), Undecided> {
         let (d, hi) = (&self.dynamics, m.hi);
         if m.lo == 0 {
@@ -658,10 +651,10 @@ impl Simulator {
                     c,
                     deg: flow.u.deg.max(3),
                 };
-                raise_peak_over(peak, &slip, None, [slip1, spread], s, peak_tol, ends_only)?;
+                raise_peak_over(peak, &slip, None, [slip1, spread], how)?;
             }
         } else {
-            let tau = if s >= 1.0 { flow.h } else { s * flow.h };
+            let tau = if how.0 >= 1.0 { flow.h } else { how.0 * flow.h };
             hermite::raise_peak(peak, slip0, vrel0, slip1, vrel1, tau);
         }
         Ok(())
