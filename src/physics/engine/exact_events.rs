@@ -542,13 +542,8 @@ impl Simulator {
         // cubic through the ends is exact.
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let how = (s, tol.max(PEAK_TOL), ends_only);
-        raise_peak_over(
-            &mut peak_u0,
-            &flow.u,
-            Some(&flow.v),
-            [u0, flow.u_spread],
-            how,
-        )?;
+        let u_ends = [u0, flow.u_spread];
+        raise_peak_over(&mut peak_u0, &flow.u, Some(&flow.v), u_ends, how)?;
         let a_start = flow.accel_start;
         peak_a0 = peak_a0.max(a_start.abs()).max(accel_end.abs());
         if a_start.abs() + flow.accel_spread_bound > peak_a0 {
@@ -588,11 +583,8 @@ impl Simulator {
             let slip1 = slip0 + du[hi] - du[lo];
             self.e_friction[j] += friction_work(d.slip_force[j], du[hi] - du[lo]);
             let peak = self.peak_slip[j].max(slip0.abs()).max(slip1.abs());
-            self.peak_slip[j] = if watched & (1 << j) != 0 {
-                peak
-            } else {
-                raised[j]
-            };
+            let watch = watched & (1 << j) != 0;
+            self.peak_slip[j] = if watch { peak } else { raised[j] };
         }
 
         // Work: input `∫ (Fext - m ag) v = m (q0 Δu + p' (τ u(τ) - ∫u))`,

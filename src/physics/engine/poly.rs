@@ -25,6 +25,15 @@ pub(super) const PEAK_TOL: f64 = 1e-7;
 /// derivative changes sign at most a few times over `ω H <= 0.5`).
 const MAX_CRITICAL_POINTS: usize = 8;
 
+/// `[k (k - 1), k - 2]` for k = 2.. ([`Poly::bound`]'s factors, exact).
+const FALLING_2: [[f64; 2]; N_COEF] = {
+    let (mut f, mut k) = ([[0.0; 2]; N_COEF], 2);
+    while k < N_COEF {
+        (f[k], k) = ([(k * (k - 1)) as f64, k as f64 - 2.0], k + 1);
+    }
+    f
+};
+
 /// A polynomial `Σ c[k] s^k` on `s ∈ [0, 1]`.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Poly {
@@ -37,12 +46,10 @@ impl Poly {
     /// inequality; the factor covers the rounding of the coefficients and
     /// of the sums).
     pub(super) fn bound(&self, n: usize) -> f64 {
-        let (mut m, mut kf) = (0.0, 2.0);
-        let top = self.deg + 1;
-        for c in &self.c[top.min(2)..top] {
-            let term = kf * (kf - 1.0) * c.abs();
-            m += if n == 2 { term } else { term * (kf - 2.0) };
-            kf += 1.0;
+        let (mut m, top) = (0.0, self.deg + 1);
+        for (c, [k2, k]) in self.c[top.min(2)..top].iter().zip(&FALLING_2[2..]) {
+            let term = k2 * c.abs();
+            m += if n == 2 { term } else { term * k };
         }
         m * (1.0 + 1e-12)
     }
