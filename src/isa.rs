@@ -5,7 +5,7 @@
 //! same order (Rust fuses no multiply-add), so their results are the same
 //! bit for bit; elsewhere than on x86-64 there is one.
 
-use crate::physics::engine::{Excitation, Piece, PieceSource, Simulator};
+use crate::physics::engine::{Excitation, Piece, PieceSource, Scratch, Simulator};
 use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 static WIDE_ALLOWED: AtomicBool = AtomicBool::new(true);
@@ -82,7 +82,7 @@ impl Simulator {
     twice! {
         /// [`Simulator::stretch_run`], compiled twice.
         pub(crate) fn exact_stretch / stretch_wide / stretch_run(
-            &mut self, t1: f64, piece: &Piece, depth: u32
+            &mut self, t1: f64, piece: &Piece, depth: u32, work: &mut Scratch
         )
     }
 }

@@ -41,6 +41,7 @@ mod state_check;
 mod sweep;
 
 pub(crate) use bodies::{friction_work, move_bodies, upper_cluster_step};
+pub(crate) use exact_events::Scratch;
 pub(crate) use pieces::Piece;
 pub use pieces::{
     finite_terms, same_up_to_rounding, substeps, CheckedPieces, Excitation, PieceSource, Plain,
@@ -87,6 +88,8 @@ pub struct Simulator {
     /// The first switch at or after `watch_from` (NaN: none yet).
     first_switch: f64,
     pub(crate) stats: Stats,
+    /// The event path's polynomials (zeroed at the first event only; no state).
+    scratch: Option<Box<Scratch>>,
     /// Assignments the mode resolver tried (its work; not saved).
     tries: u64,
     /// `advance*` stop with [`SimError::WorkLimit`] once [`Simulator::work`]
@@ -127,6 +130,7 @@ impl Simulator {
             watch_from: f64::INFINITY,
             first_switch: f64::NAN,
             stats: Stats::default(),
+            scratch: None,
             tries: 0,
             work_limit: u64::MAX,
         };
@@ -380,7 +384,9 @@ impl Simulator {
                     if piece.i > piece.n {
                         break;
                     }
-                    self.exact_stretch(piece.end_of(piece.i), &piece, 0);
+                    let mut scratch = self.scratch.take().unwrap_or_default();
+                    self.exact_stretch(piece.end_of(piece.i), &piece, 0, &mut scratch);
+                    self.scratch = Some(scratch);
                     piece.i += 1;
                     self.check_work()?;
                 },

@@ -143,16 +143,14 @@ fn accel_in_place(u: &mut Poly, v: &Poly, [w2, cm]: [f64; 2], [c0, c1]: [f64; 2]
     (u.c[0], u.c[1]) = (u.c[0] + c0, u.c[1] + c1);
 }
 
-/// The structure's cluster over the rest of a substep, of length `h`, from
-/// the current state in the current mode: `u`, `v` and the absolute
-/// acceleration as polynomials in `s = τ / h`.
-#[derive(Default)]
+/// The structure's cluster over the rest of a substep, of length `h`, from the current state in
+/// the current mode: `u`, `v` and the absolute acceleration as polynomials in `s = τ / h`.
+#[derive(Clone, Debug, Default)]
 struct Flow {
     h: f64,
     u: Poly,
     v: Poly,
-    /// `spread(1)` of `u` and `v`: how far each can move from its start
-    /// over the stretch.
+    /// `spread(1)` of `u` and `v`: how far each can move from its start over the stretch.
     u_spread: f64,
     v_spread: f64,
     /// That of `v`'s terms past the second.
@@ -341,6 +339,13 @@ fn raise_peak_over(
     raise_peak_exact(peak, y, rate, ends, s, tol)
 }
 
+/// The event path's polynomials, kept over its stretches (zeroed once; each value read is written).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Scratch {
+    flow: Flow,
+    polys: [(Poly, f64); 2],
+}
+
 /// What the search of a stretch found.
 enum Next {
     /// Guards violated from the start with no positive stretch after it.
@@ -360,7 +365,7 @@ impl Simulator {
     /// to `MAX_SPLIT_DEPTH` halvings, where the guards are muted and the peaks taken at its ends.
     /// (Run as `exact_stretch`: `crate::isa`.)
     #[inline(always)]
-    pub(crate) fn stretch_run(&mut self, t1: f64, piece: &Piece, depth: u32) {
+    pub(crate) fn stretch_run(&mut self, t1: f64, piece: &Piece, depth: u32, work: &mut Scratch) {
         let (exc, t_ref) = (&piece.exc, piece.t_ref);
         let ends_only = depth >= MAX_SPLIT_DEPTH;
         let mut muted: u32 = 0;
@@ -368,17 +373,15 @@ impl Simulator {
         let mut events = 0;
         // One degree for every stretch: that of the longest.
         let deg = self.maps.stretch_degree(&self.sys, t1 - self.t);
-        let mut flow = Flow::default();
-        // The guards' polynomials of every stretch, written in place.
-        let mut polys = [(Poly::default(), 0.0); 2];
+        let Scratch { flow, polys } = work;
         while self.t < t1 {
             let h = t1 - self.t;
             flow.start(self, exc, t_ref, h, deg);
             let tol = EVENT_TIME_TOL / h;
-            let next = match self.next_event(&mut flow, &mut polys, muted, tol) {
+            let next = match self.next_event(flow, polys, muted, tol) {
                 Ok(next) => next,
-                Err(Undecided) if depth == 0 => return self.fine_stretches(t1, piece),
-                Err(Undecided) if !ends_only => return self.split_stretch(t1, piece, depth),
+                Err(Undecided) if depth == 0 => return self.fine_stretches(t1, piece, work),
+                Err(Undecided) if !ends_only => return self.split_stretch(t1, piece, depth, work),
                 Err(Undecided) => {
                     muted |= self.dynamics.changing_guards;
                     continue;
@@ -386,12 +389,11 @@ impl Simulator {
             };
             match next {
                 Next::AtOnce(at_once) => {
-                    // Fired once already: a contact that chatters (a
-                    // degenerate stack, such as equal friction above and
-                    // below a block), muted for a fine stretch only.
+                    // Fired once already: a contact that chatters (a degenerate stack, such as
+                    // equal friction above and below a block), muted for a fine stretch only.
                     let again = at_once & fired_at_once;
                     if again != 0 && depth == 0 {
-                        return self.fine_stretches(t1, piece);
+                        return self.fine_stretches(t1, piece, work);
                     }
                     muted |= again;
                     let fire = at_once & !fired_at_once;
@@ -402,14 +404,11 @@ impl Simulator {
                 }
                 Next::Event(event, searched) => {
                     let s = event.map_or(1.0, |(s, _)| s);
-                    if self
-                        .take_exact(&mut flow, s, tol, muted, ends_only)
-                        .is_err()
-                    {
+                    if self.take_exact(flow, s, tol, muted, ends_only).is_err() {
                         if depth == 0 {
-                            return self.fine_stretches(t1, piece);
+                            return self.fine_stretches(t1, piece, work);
                         }
-                        return self.split_stretch(t1, piece, depth);
+                        return self.split_stretch(t1, piece, depth, work);
                     }
                     if s >= 1.0 {
                         self.t = t1;
@@ -427,7 +426,7 @@ impl Simulator {
     /// The rest of a substep to `t1` in equal stretches of at most `h_fine`.
     #[cold]
     #[inline(never)]
-    fn fine_stretches(&mut self, t1: f64, piece: &Piece) {
+    fn fine_stretches(&mut self, t1: f64, piece: &Piece, work: &mut Scratch) {
         let t0 = self.t;
         let n = substeps(t1 - t0, self.h_fine) as usize;
         for i in 1..=n {
@@ -436,17 +435,17 @@ impl Simulator {
             } else {
                 t0 + (t1 - t0) * i as f64 / n as f64
             };
-            self.exact_stretch(end, piece, 1);
+            self.exact_stretch(end, piece, 1, work);
         }
     }
 
     /// The stretch to `t1` in two halves, one level deeper.
     #[cold]
     #[inline(never)]
-    fn split_stretch(&mut self, t1: f64, piece: &Piece, depth: u32) {
+    fn split_stretch(&mut self, t1: f64, piece: &Piece, depth: u32, work: &mut Scratch) {
         let mid = self.t + 0.5 * (t1 - self.t);
-        self.exact_stretch(mid, piece, depth + 1);
-        self.exact_stretch(t1, piece, depth + 1);
+        self.exact_stretch(mid, piece, depth + 1, work);
+        self.exact_stretch(t1, piece, depth + 1, work);
     }
 
     /// The first zero over the stretch of `flow` among the guards of the
@@ -536,10 +535,9 @@ impl Simulator {
         let [a0, a1] = flow.accel_linear;
         let accel_end = a0 + a1 * tau - flow.w2 * u0 - flow.cm * v0;
 
-        // Peaks first (they can fail): |u0|, the absolute acceleration, and
-        // the slip of the interface on top of the structure's cluster;
-        // between two upper clusters a slip is quadratic in time and the
-        // cubic through the ends is exact.
+        // Peaks first (they can fail): |u0|, the absolute acceleration, and the slip of the
+        // interface on top of the structure's cluster; between two upper clusters a slip is
+        // quadratic in time and the cubic through the ends is exact.
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let how = (s, tol.max(PEAK_TOL), ends_only);
         let u_ends = [u0, flow.u_spread];
@@ -573,8 +571,7 @@ impl Simulator {
             let vrel = [self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]];
             let ends = [[slip0, slip0 + du[hi] - du[lo]], vrel];
             raised[j] = self.peak_slip[j];
-            let m = Moving { j, hi, lo };
-            self.raise_unwatched_slip(&mut raised[j], flow, m, ends, how)?;
+            self.raise_unwatched_slip(&mut raised[j], flow, Moving { j, hi, lo }, ends, how)?;
         }
         // Friction's work: the constant force times the slip.
         for m in &d.moving[..d.n_moving] {
@@ -587,8 +584,7 @@ impl Simulator {
             self.peak_slip[j] = if watch { peak } else { raised[j] };
         }
 
-        // Work: input `∫ (Fext - m ag) v = m (q0 Δu + p' (τ u(τ) - ∫u))`,
-        // viscous `c ∫ v²`.
+        // Work: input `∫ (Fext - m ag) v = m (q0 Δu + p' (τ u(τ) - ∫u))`, viscous `c ∫ v²`.
         let mass = d.mass[0];
         let int_u = flow.h * int_u;
         let input = mass * (flow.q0 * (u0 - u0_start) + flow.p1 * (tau * u0 - int_u));
@@ -771,7 +767,7 @@ mod tests {
             ..Default::default()
         };
         let h = sim.map_step();
-        sim.exact_stretch(h, &Piece::new(0.0, h, &exc, h), 0);
+        sim.exact_stretch(h, &Piece::new(0.0, h, &exc, h), 0, &mut Scratch::default());
         let (omega, zeta) = (sim.sys.omega_p, p.zeta);
         let load = |t: f64| -(ag + ag_rate * t);
         let at = |t: f64| sdof::step(omega, zeta, t, (u0, v0), load(0.0), load(t));

@@ -380,19 +380,20 @@ const GAUSS_12: [[f64; 6]; 2] = [
         0.10158371336153287, 0.1167462682691773, 0.12457352290670134],
 ];
 
-/// `∫_0^s v(σ)² dσ` for the structure's velocity `v` over a stretch, a Taylor polynomial of
-/// degree `deg` ([`super::exact_map::degree`]), by a Gauss rule: 6 points for `deg <= 9` (`ρ = h
-/// (ω + c/m) <= 0.0692`), 8 for `deg <= 14` (`ρ <= 0.551`), else 12. As `v'' + (c/m) v' + ω² v`
-/// is constant (a load linear in time), `v` is set by `v(0)`, `v'(0)` and `v''(0)`: the largest
-/// ratio of the rule's error to the integral over those three is a generalized eigenvalue, at
-/// most 1.4e-19 (6 points), 1.9e-20 (8) and 1.9e-25 (12) at each rule's largest `ρ` (50-digit
-/// arithmetic, ζ 0 to 0.999); the sums round at a few ulps of it.
+/// `∫_0^s v(σ)² dσ` for the structure's velocity `v` over a stretch, a Taylor polynomial of degree
+/// `deg` ([`super::exact_map::degree`]), by a Gauss rule: 6 points for `deg <= 9` (`ρ = h (ω +
+/// c/m) <= 0.0692`), 8 for `deg <= 14` (`ρ <= 0.551`), else 12. As `v'' + (c/m) v' + ω² v` is
+/// constant (a load linear in time), `v` is set by `v(0)`, `v'(0)`, `v''(0)`: the largest ratio of
+/// the rule's error to the integral over them (a generalized eigenvalue, 50 digits, ζ 0 to 0.999,
+/// each rule's largest `ρ`) is 1.4e-19 (6 points), 1.9e-20 (8), 1.9e-25 (12); sums round at ulps.
 #[inline]
 pub(super) fn integral_of_square(p: &Poly, s: f64) -> f64 {
-    match p.deg {
-        ..=9 => gauss_square(p, s, GAUSS_6),
-        ..=14 => gauss_square(p, s, GAUSS_8),
-        _ => gauss_square(p, s, GAUSS_12),
+    if p.deg <= 9 {
+        gauss_square(p, s, GAUSS_6)
+    } else if p.deg <= 14 {
+        gauss_square(p, s, GAUSS_8)
+    } else {
+        gauss_square(p, s, GAUSS_12)
     }
 }
 
