@@ -170,9 +170,11 @@ impl ExactMap {
         let mut q = [[0.0; 4]; 4];
         for i in (0..degree + 1).rev() {
             let mut w = [0.0; 4];
-            for j in (0..degree + 1).rev() {
-                for (ws, r) in w.iter_mut().zip(rows[j][1]) {
-                    *ws += r * RECIPROCALS[i + j];
+            // (Slices zipped: no bounds checks in the O(degree²) loop.)
+            let recips = &RECIPROCALS[i..i + degree + 1];
+            for (row, inv) in rows[..degree + 1].iter().zip(recips).rev() {
+                for (ws, r) in w.iter_mut().zip(row[1]) {
+                    *ws += r * inv;
                 }
             }
             for r in 0..4 {
@@ -200,10 +202,10 @@ impl ExactMap {
         // [`degree`]'s threshold of it); the factor covers rounding.
         let mut bound = [[0.0; 4]; 5];
         for (b, m) in bound.iter_mut().zip(1..=5usize) {
-            for k in (0..n_terms - m + 1).rev() {
-                let falling = FALLING[m][k];
-                for i in 0..4 {
-                    b[i] += rows[m + k][1][i].abs() * falling;
+            let terms = rows[m..n_terms + 1].iter().zip(&FALLING[m]);
+            for (row, falling) in terms.rev() {
+                for (bs, r) in b.iter_mut().zip(row[1]) {
+                    *bs += r.abs() * falling;
                 }
             }
             let scale = (1.0 + 1e-6) / h.powi(m as i32);
