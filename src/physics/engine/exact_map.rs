@@ -166,13 +166,11 @@ impl ExactMap {
         }
         // v(τ) = Σ_k r_k z (τ/h)^k with r_k the v row of T_k, so
         // ∫_0^h v² = h Σ_ij (r_i z)(r_j z) / (i + j + 1): the inner sums
-        // over j first, w[i] = Σ_j r_j / (i + j + 1).
+        // over j first, w[i] = Σ_j r_j / (i + j + 1) (zipped slices: no bounds checks).
         let mut q = [[0.0; 4]; 4];
         for i in (0..degree + 1).rev() {
-            let mut w = [0.0; 4];
-            // (Slices zipped: no bounds checks in the O(degree²) loop.)
-            let recips = &RECIPROCALS[i..i + degree + 1];
-            for (row, inv) in rows[..degree + 1].iter().zip(recips).rev() {
+            let (mut w, inv) = ([0.0; 4], &RECIPROCALS[i..i + degree + 1]);
+            for (row, inv) in rows[..degree + 1].iter().zip(inv).rev() {
                 for (ws, r) in w.iter_mut().zip(row[1]) {
                     *ws += r * inv;
                 }
@@ -202,8 +200,7 @@ impl ExactMap {
         // [`degree`]'s threshold of it); the factor covers rounding.
         let mut bound = [[0.0; 4]; 5];
         for (b, m) in bound.iter_mut().zip(1..=5usize) {
-            let terms = rows[m..n_terms + 1].iter().zip(&FALLING[m]);
-            for (row, falling) in terms.rev() {
+            for (row, falling) in rows[m..n_terms + 1].iter().zip(&FALLING[m]).rev() {
                 for (bs, r) in b.iter_mut().zip(row[1]) {
                     *bs += r.abs() * falling;
                 }
