@@ -147,13 +147,14 @@ impl ExactMap {
         let degree = degree(h, w2, cm);
         let n_terms = degree + 6;
         let mut rows = [[[0.0; 4]; 2]; TERMS + 1];
-        rows[0] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
-        // (Half-open ranges: an inclusive range's iterator tests a flag at
-        // every step.)
-        for k in 1..n_terms + 1 {
-            let f = h / k as f64;
-            rows[k] =
-                rows[k - 1].map(|x| [-w2 * x[1] * f, (x[0] - cm * x[1]) * f, x[1] * f, x[2] * f]);
+        let mut row = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
+        rows[0] = row;
+        // (`row` carried in registers: read back from `rows`, each half of it spans two stores,
+        // which the processor cannot forward.)
+        for (k, next) in rows[1..n_terms + 1].iter_mut().enumerate() {
+            let f = h / (k + 1) as f64;
+            row = row.map(|x| [-w2 * x[1] * f, (x[0] - cm * x[1]) * f, x[1] * f, x[2] * f]);
+            *next = row;
         }
         let (mut u, mut v, mut int_u) = ([0.0; 4], [0.0; 4], [0.0; 4]);
         // Sum the small terms first.
