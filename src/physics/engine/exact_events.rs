@@ -125,7 +125,7 @@ pub(super) fn raise_substep_peaks(
                     e + s * o
                 };
                 let [y, d, e, f] = y_at(k, *t, [at(&u), at(&v)]);
-                let bq = (f.abs() + h * fourth) * (d.abs() / m);
+                let bq = (f.abs() + h * fourth) * (d / m).abs(); // (one division: d / m)
                 if bq <= m && bq * (d / m) * (d / m) <= 2e-17 * y.abs() && (0.0..=h).contains(t) {
                     *found = Some(y_ends.max((y - 0.5 * d * d / e).abs()));
                     *state = None;
