@@ -125,8 +125,25 @@ pub(super) struct ExactMap {
 }
 
 impl ExactMap {
-    /// Builds the map of the cluster of mass `mass` over `h` (already canonical).
+    /// Builds the map of the cluster of mass `mass` over `h` (already canonical); compiled for
+    /// AVX-512 too (a row's four terms to a register), the same operations either way.
     pub(super) fn new(sys: &System, mass: f64, h: f64) -> ExactMap {
+        #[cfg(target_arch = "x86_64")]
+        if crate::isa::wide_registers() {
+            // SAFETY: the processor has the features (just checked).
+            return unsafe { ExactMap::new_wide(sys, mass, h) };
+        }
+        ExactMap::build(sys, mass, h)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl")]
+    unsafe fn new_wide(sys: &System, mass: f64, h: f64) -> ExactMap {
+        ExactMap::build(sys, mass, h)
+    }
+
+    #[inline(always)]
+    fn build(sys: &System, mass: f64, h: f64) -> ExactMap {
         // A prescribed support has no spring, no damper, and its cluster
         // may have no mass: the map of no motion (w2 = cm = 0).
         let (w2, cm) = if sys.prescribed() {
