@@ -246,28 +246,8 @@ impl RecordPieces<'_> {
         if k < self.uniform_end {
             return self.uniform_end;
         }
-        let (time, dt, stop) = (self.time, self.dt, self.stop);
-        let uniform = |t0: f64, t1: f64| same_up_to_rounding(t1 - t0, dt, t1);
-        let mut j = k;
-        // Eight at a time, each eight checked whole (no branch per sample,
-        // and no bounds checks: the chunks of the times from `k - 1` and
-        // from `k`).
-        let t = &time[k - 1..stop];
-        for (t0, t1) in t.chunks_exact(8).zip(t[1..].chunks_exact(8)) {
-            if !t0
-                .iter()
-                .zip(t1)
-                .fold(true, |all, (&a, &b)| all & uniform(a, b))
-            {
-                break;
-            }
-            j += 8;
-        }
-        while j < stop && uniform(time[j - 1], time[j]) {
-            j += 1;
-        }
-        self.uniform_end = j;
-        j
+        self.uniform_end = uniform_end(self.time, self.dt, self.stop, k);
+        self.uniform_end
     }
 
     /// A partial interval, one before the first or after the last sample,
@@ -295,6 +275,48 @@ impl RecordPieces<'_> {
         self.align();
         Some((t1, exc))
     }
+}
+
+/// The first sample from `k >= 1` on (`stop` at most) whose interval is not `dt` long up to the
+/// rounding of the times; compiled for AVX-512 too (eight samples to a register), as the engine's
+/// hot functions are (`crate::isa`): the same comparisons either way.
+fn uniform_end(time: &[f64], dt: f64, stop: usize, k: usize) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if crate::isa::wide_registers() {
+        // SAFETY: the processor has the features (just checked).
+        return unsafe { uniform_end_wide(time, dt, stop, k) };
+    }
+    uniform_end_of(time, dt, stop, k)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl")]
+unsafe fn uniform_end_wide(time: &[f64], dt: f64, stop: usize, k: usize) -> usize {
+    uniform_end_of(time, dt, stop, k)
+}
+
+#[inline(always)]
+fn uniform_end_of(time: &[f64], dt: f64, stop: usize, k: usize) -> usize {
+    let uniform = |t0: f64, t1: f64| same_up_to_rounding(t1 - t0, dt, t1);
+    let mut j = k;
+    // Eight at a time, each eight checked whole (no branch per sample,
+    // and no bounds checks: the chunks of the times from `k - 1` and
+    // from `k`).
+    let t = &time[k - 1..stop];
+    for (t0, t1) in t.chunks_exact(8).zip(t[1..].chunks_exact(8)) {
+        if !t0
+            .iter()
+            .zip(t1)
+            .fold(true, |all, (&a, &b)| all & uniform(a, b))
+        {
+            break;
+        }
+        j += 8;
+    }
+    while j < stop && uniform(time[j - 1], time[j]) {
+        j += 1;
+    }
+    j
 }
 
 /// Samples `i - 1` and `i` (one bounds check).

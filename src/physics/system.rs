@@ -4,16 +4,13 @@
 use crate::physics::params::{ParamError, Params, Support, MAX_BODIES};
 use std::f64::consts::PI;
 
-/// Body 0 is the structure; bodies 1..=n are blocks. Interface arrays are
-/// indexed by interface number j = 1..=n (index 0 unused): interface j lies
-/// between body j-1 and body j.
+/// Body 0 is the structure; bodies 1..=n are blocks. Interface arrays are indexed by interface
+/// number j = 1..=n (index 0 unused): interface j lies between body j-1 and body j.
 ///
-/// On a prescribed support ([`Support::Prescribed`]) body 0 is the support,
-/// whose absolute acceleration follows the input `ag`: `k = c = 0`,
-/// `mass[0] = 0` (the support's own mass is its model's business;
-/// [`System::mobility`] stands for it, see
-/// [`crate::physics::mode::support_law`]) and `omega_p = 0` (no spring: the substeps do not
-/// follow from it, see `Simulator::map_step`).
+/// On a prescribed support ([`Support::Prescribed`]) body 0 is the support, whose absolute
+/// acceleration follows the input `ag`: `k = c = 0`, `mass[0] = 0` (the support's own mass is its
+/// model's business; [`System::mobility`] stands for it, see [`crate::physics::mode::support_law`])
+/// and `omega_p = 0` (no spring: the substeps do not follow from it, see `Simulator::map_step`).
 #[derive(Clone, Debug)]
 pub struct System {
     /// Number of blocks.
@@ -36,21 +33,18 @@ pub struct System {
     pub free: u32,
     /// Interfaces (bit j) whose static and kinetic friction differ.
     unequal: u32,
-    /// Circular frequency of the bare structure, sqrt(k / mp); 0 on a
-    /// prescribed support.
+    /// Circular frequency of the bare structure, sqrt(k / mp); 0 on a prescribed support.
     pub omega_p: f64,
     /// What block 1 rests on.
     pub support: Support,
-    /// The support's mobility `d(floor acceleration) / d(floor force)`
-    /// (1/kg) of a prescribed support, in its law of motion
-    /// ([`crate::physics::mode::support_law`]); 0 unless
+    /// The support's mobility `d(floor acceleration) / d(floor force)` (1/kg) of a prescribed
+    /// support, in its law of motion ([`crate::physics::mode::support_law`]); 0 unless
     /// `Simulator::set_support_mobility` set it.
     pub mobility: f64,
-    /// The reference mode of a prescribed support's law: the mass of its
-    /// cluster on the support (`M_ref`, kg; the blocks stuck to it) and the
-    /// constant load on that cluster (`s_ref`, N) in the mode in force when
-    /// the master last set the inputs ([`crate::physics::mode::support_law`]).
-    /// Set by the simulator; 0 until then.
+    /// The reference mode of a prescribed support's law: the mass of its cluster on the support
+    /// (`M_ref`, kg; the blocks stuck to it) and the constant load on that cluster (`s_ref`, N) in
+    /// the mode in force when the master last set the inputs
+    /// ([`crate::physics::mode::support_law`]). Set by the simulator; 0 until then.
     pub ref_mass: f64,
     /// See [`System::ref_mass`].
     pub ref_load: f64,

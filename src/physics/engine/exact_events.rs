@@ -90,45 +90,64 @@ pub(super) fn raise_substep_peaks(
     // h²/8 sup|y''''|), one zero t*; Halley's steps from the inverse quintic through the ends
     // of y', y'', y''' until at t, |t* - t| <= q = |y'|/m and y(t*) = y - y'²/(2y'') within
     // b q³/2 <= 1e-17 |y| (b = |y'''| + h sup|y''''| bounds |y'''|; b q <= m).
-    let fast = |peak: &mut f64, k: [f64; 4], fourth: f64, y_end: f64| {
+    let start = |asked: bool, k: [f64; 4], fourth: f64, y_end: f64| {
+        asked.then_some(())?;
         let ([y0, d0, e0, f0], [_, d1, e1, f1]) =
             (y_at(k, 0.0, [z[0], z[1]]), y_at(k, h, [u_end, v_end]));
         let m = e0.abs().min(e1.abs()) - 0.125 * h * h * fourth;
-        (d0 * d1 < 0.0 && e0 * e1 > 0.0 && m > 0.0).then_some(())?;
-        let (x, dd, g0, g1, inv_h) = (d0 / (d0 - d1), d1 - d0, 1.0 / e0, 1.0 / e1, 1.0 / h);
+        let ends = y0.abs().max(y_end.abs());
+        (e0 * e1 > 0.0 && m > 0.0 && !(d0 * d1).is_nan()).then_some(())?;
+        if d0 * d1 >= 0.0 {
+            return Some(Err(ends)); // y' monotone from ends of one sign: the peak is at an end
+        }
+        let (x, dd, g0, g1) = (d0 / (d0 - d1), d1 - d0, 1.0 / e0, 1.0 / e1);
         let (x1, x2) = (1.0 - x, x * x);
-        let mut t = h * x2 * x * (10.0 - 15.0 * x + 6.0 * x2)
+        let t = h * x2 * x * (10.0 - 15.0 * x + 6.0 * x2)
             + dd * x * x1 * (x1 * x1 * (1.0 + 3.0 * x) * g0 - x2 * (4.0 - 3.0 * x) * g1)
             - 0.5 * dd * dd * x2 * x1 * x1 * (x1 * f0 * g0 * g0 * g0 + x * f1 * g1 * g1 * g1);
-        for _ in 0..4 {
-            // Horner's rule in s² on the even and odd terms (shorter chains; whole pairs, the
-            // coefficient past an even degree being zero).
-            let (s, s2) = (t * inv_h, (t * inv_h) * (t * inv_h));
-            let at = |p: &Poly| {
-                let pairs = p.c[..(deg + 2) & !1].chunks_exact(2).rev();
-                let [e, o] = pairs.fold([0.0, 0.0], |[e, o], c| [e * s2 + c[0], o * s2 + c[1]]);
-                e + s * o
-            };
-            let [y, d, e, f] = y_at(k, t, [at(&u), at(&v)]);
-            let bq = (f.abs() + h * fourth) * (d.abs() / m);
-            if bq <= m && bq * (d / m) * (d / m) <= 2e-17 * y.abs() && (0.0..=h).contains(&t) {
-                let top = (y - 0.5 * d * d / e).abs();
-                *peak = peak.max(y0.abs()).max(y_end.abs()).max(top);
-                return Some(());
-            }
-            t -= d / (e - 0.5 * d * f / e);
-        }
-        None
+        Some(Ok((k, fourth, m, t, ends)))
     };
+    // u's and A's searches in step (their evaluations overlap); found peaks raised after the rest.
+    let ks = [[1.0, 0.0, 0.0, 0.0], [-w2, -cm, cf, cf_rate]];
+    let asked = [(peak_u.is_some(), u_end), (peak_a.is_some(), a_end)];
+    let first: [_; 2] = std::array::from_fn(|j| start(asked[j].0, ks[j], fourth[j], asked[j].1));
+    let (mut search, inv_h) = (first.map(|s| s.and_then(Result::ok)), 1.0 / h);
+    let mut found = first.map(|s| s.and_then(Result::err));
+    for _ in 0..4 {
+        for (state, found) in search.iter_mut().zip(&mut found) {
+            if let &mut Some((k, fourth, m, ref mut t, y_ends)) = state {
+                // Horner's rule in s² on the even and odd terms (shorter chains; whole pairs,
+                // the coefficient past an even degree being zero).
+                let (s, s2) = (*t * inv_h, (*t * inv_h) * (*t * inv_h));
+                let at = |p: &Poly| {
+                    let pairs = p.c[..(deg + 2) & !1].chunks_exact(2).rev();
+                    let [e, o] = pairs.fold([0.0, 0.0], |[e, o], c| [e * s2 + c[0], o * s2 + c[1]]);
+                    e + s * o
+                };
+                let [y, d, e, f] = y_at(k, *t, [at(&u), at(&v)]);
+                let bq = (f.abs() + h * fourth) * (d / m).abs(); // (one division: d / m)
+                if bq <= m && bq * (d / m) * (d / m) <= 2e-17 * y.abs() && (0.0..=h).contains(t) {
+                    *found = Some(y_ends.max((y - 0.5 * d * d / e).abs()));
+                    *state = None;
+                } else {
+                    *t -= d / (e - 0.5 * d * f / e);
+                }
+            }
+        }
+    }
     if let Some(peak) = peak_u {
-        if fast(peak, [1.0, 0.0, 0.0, 0.0], fourth[0], u_end).is_none() {
-            raise_peak_inside(peak, &u, Some(&v), u_end, 1.0, tol)?;
+        match found[0] {
+            Some(top) => *peak = peak.max(top),
+            None => raise_peak_inside(peak, &u, Some(&v), u_end, 1.0, tol)?,
         }
     }
     if let Some(peak) = peak_a {
-        if fast(peak, [-w2, -cm, cf, cf_rate], fourth[1], a_end).is_none() {
-            accel_in_place(&mut u, &v, [w2, cm], [cf, cf_rate * h]); // u done with
-            raise_peak_inside(peak, &u, None, a_end, 1.0, tol)?;
+        match found[1] {
+            Some(top) => *peak = peak.max(top),
+            None => {
+                accel_in_place(&mut u, &v, [w2, cm], [cf, cf_rate * h]); // u done with
+                raise_peak_inside(peak, &u, None, a_end, 1.0, tol)?;
+            }
         }
     }
     Ok(())

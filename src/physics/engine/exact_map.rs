@@ -1,22 +1,19 @@
 //! The structure's cluster over one substep as its exact affine map: the
 //! Taylor sum of exp(A h) to round-off.
 //!
-//! In one mode and one linear piece of excitation the structure's cluster is
-//! the linear system `z' = A z` over `z = [u, v, p, p']`, where `p(τ)` is its
-//! forcing per unit mass relative to the support (the mode's constant
-//! friction load and `Fext` over the cluster's mass, minus `ag`), linear in
-//! time. `n` RK4 substeps of `h / n` compose into the matrix
-//! `T4(A h / n)^n` (`T4` the degree-4 Taylor polynomial), which tends to
-//! `exp(A h)` as `n` grows; we take that limit directly, as the Taylor sum of
-//! `exp(A h)` to round-off ([`degree`]: 15 at most where the substep keeps
-//! `ω h <= 0.5` and ζ = 0.05). A substep is then one small matrix-vector
-//! product whatever the accuracy asked.
+//! In one mode and one linear piece of excitation the structure's cluster is the linear system
+//! `z' = A z` over `z = [u, v, p, p']`, where `p(τ)` is its forcing per unit mass relative to the
+//! support (the mode's constant friction load and `Fext` over the cluster's mass, minus `ag`),
+//! linear in time. `n` RK4 substeps of `h / n` compose into the matrix `T4(A h / n)^n` (`T4` the
+//! degree-4 Taylor polynomial), which tends to `exp(A h)` as `n` grows; we take that limit
+//! directly, as the Taylor sum of `exp(A h)` to round-off ([`degree`]: 15 at most where the substep
+//! keeps `ω h <= 0.5` and ζ = 0.05). A substep is then one small matrix-vector product whatever the
+//! accuracy asked.
 //!
-//! From the same Taylor terms, per mode and substep length: the integral of
-//! `u` (the input work is bilinear in it and the inputs), the quadratic form
-//! of the viscous work `c ∫ v²`, and bounds on the derivatives of `v` over
-//! the substep, which let the fast path prove that no guard changes sign and
-//! that no peak is missed between the substep's ends.
+//! From the same Taylor terms, per mode and substep length: the integral of `u` (the input work is
+//! bilinear in it and the inputs), the quadratic form of the viscous work `c ∫ v²`, and bounds on
+//! the derivatives of `v` over the substep, which let the fast path prove that no guard changes
+//! sign and that no peak is missed between the substep's ends.
 
 use super::sweep::Rows;
 use crate::physics::system::System;
@@ -59,16 +56,15 @@ const FALLING: [[f64; TERMS + 1]; 6] = {
     f
 };
 
-/// Degree of the Taylor sum of `exp(A h) z`: the first `k >= 4` with
-/// `ρ^k / k! < 1e-16`, `ρ = h max(ω + c/m, 1)`, at most `MAX_DEGREE`. In the
-/// energy's norm `|[ω u, v]|` the oscillator's block of `A h` is at most
-/// `h (ω + c/m) <= ρ`, and the forcing enters as `h p` and `h² p'`, so the
-/// terms past `k` sum to at most `(2 + 2/ρ) Σ_(j>k) ρ^j / j! < 2e-16 (1 +
-/// ρ) / (k + 1 - ρ)`, about 4e-17, of `max(|[ω u, v]|, (|p| + h |p'|) / (ω +
-/// c/m))` (the state and the forcing's static response over the substep):
-/// below the rounding of the sums (1.1e-16). (`h (ω + c/m) <= 0.5 (1 + 2ζ)
-/// < 1.5`, met by degree 21; a long substep of a slow structure, `ω + c/m
-/// < 1`, may take all 21 terms, more than it needs.)
+/// Degree of the Taylor sum of `exp(A h) z`: the first `k >= 4` with `ρ^k / k! < 1e-16`,
+/// `ρ = h max(ω + c/m, 1)`, at most `MAX_DEGREE`. In the energy's norm `|[ω u, v]|` the
+/// oscillator's block of `A h` is at most `h (ω + c/m) <= ρ`, and the forcing enters as `h p` and
+/// `h² p'`, so the terms past `k` sum to at most
+/// `(2 + 2/ρ) Σ_(j>k) ρ^j / j! < 2e-16 (1 + ρ) / (k + 1 - ρ)`, about 4e-17, of
+/// `max(|[ω u, v]|, (|p| + h |p'|) / (ω + c/m))` (the state and the forcing's static response over
+/// the substep): below the rounding of the sums (1.1e-16). (`h (ω + c/m) <= 0.5 (1 + 2ζ) < 1.5`,
+/// met by degree 21; a long substep of a slow structure, `ω + c/m < 1`, may take all 21 terms, more
+/// than it needs.)
 pub(super) fn degree(h: f64, w2: f64, cm: f64) -> usize {
     let rho = h * (w2.sqrt() + cm).max(1.0);
     let mut term = 1.0;
@@ -84,10 +80,9 @@ pub(super) fn degree(h: f64, w2: f64, cm: f64) -> usize {
 /// highest of every mode).
 pub(super) const MAP_H_OMEGA: f64 = 0.5;
 
-/// Rounds `h` to 30 significant bits. Maps are built for the rounded length
-/// and the rest (at most 1e-9 relative) carried to first order, so that the
-/// result does not depend on which pieces came first (a restored saved
-/// state computes what the original run computed).
+/// Rounds `h` to 30 significant bits. Maps are built for the rounded length and the rest (at most
+/// 1e-9 relative) carried to first order, so that the result does not depend on which pieces came
+/// first (a restored saved state computes what the original run computed).
 #[inline]
 pub(super) fn canonical_length(h: f64) -> f64 {
     const DROP: u32 = 22;
@@ -98,8 +93,7 @@ pub(super) fn canonical_length(h: f64) -> f64 {
 /// The exact map of the structure's cluster over a substep of length `h`.
 #[derive(Clone, Debug)]
 pub(super) struct ExactMap {
-    /// The substep length it was built for (its cluster's mass is the
-    /// cache's key).
+    /// The substep length it was built for (its cluster's mass is the cache's key).
     pub(super) h: f64,
     /// Degree of its Taylor sum ([`degree`]).
     pub(super) degree: usize,
@@ -131,9 +125,25 @@ pub(super) struct ExactMap {
 }
 
 impl ExactMap {
-    /// Builds the map of the cluster of mass `mass` over `h` (already
-    /// canonical).
+    /// Builds the map of the cluster of mass `mass` over `h` (already canonical); compiled for
+    /// AVX-512 too (a row's four terms to a register), the same operations either way.
     pub(super) fn new(sys: &System, mass: f64, h: f64) -> ExactMap {
+        #[cfg(target_arch = "x86_64")]
+        if crate::isa::wide_registers() {
+            // SAFETY: the processor has the features (just checked).
+            return unsafe { ExactMap::new_wide(sys, mass, h) };
+        }
+        ExactMap::build(sys, mass, h)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl")]
+    unsafe fn new_wide(sys: &System, mass: f64, h: f64) -> ExactMap {
+        ExactMap::build(sys, mass, h)
+    }
+
+    #[inline(always)]
+    fn build(sys: &System, mass: f64, h: f64) -> ExactMap {
         // A prescribed support has no spring, no damper, and its cluster
         // may have no mass: the map of no motion (w2 = cm = 0).
         let (w2, cm) = if sys.prescribed() {
@@ -141,19 +151,19 @@ impl ExactMap {
         } else {
             (sys.k / mass, sys.c / mass)
         };
-        // Rows u and v of the Taylor terms T_k = (A h)^k / k!: from
-        // T_k = T_(k-1) A h / k, a row x goes to x A h / k, where
-        // x A = [-w2 x1, x0 - cm x1, x1, x2] (A is sparse).
+        // Rows u and v of the Taylor terms T_k = (A h)^k / k!: from T_k = T_(k-1) A h / k, a row x
+        // goes to x A h / k, where x A = [-w2 x1, x0 - cm x1, x1, x2] (A is sparse).
         let degree = degree(h, w2, cm);
         let n_terms = degree + 6;
         let mut rows = [[[0.0; 4]; 2]; TERMS + 1];
-        rows[0] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
-        // (Half-open ranges: an inclusive range's iterator tests a flag at
-        // every step.)
-        for k in 1..n_terms + 1 {
-            let f = h / k as f64;
-            rows[k] =
-                rows[k - 1].map(|x| [-w2 * x[1] * f, (x[0] - cm * x[1]) * f, x[1] * f, x[2] * f]);
+        let mut row = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
+        rows[0] = row;
+        // (`row` carried in registers: read back from `rows`, each half of it spans two stores,
+        // which the processor cannot forward.)
+        for (k, next) in rows[1..n_terms + 1].iter_mut().enumerate() {
+            let f = h / (k + 1) as f64;
+            row = row.map(|x| [-w2 * x[1] * f, (x[0] - cm * x[1]) * f, x[1] * f, x[2] * f]);
+            *next = row;
         }
         let (mut u, mut v, mut int_u) = ([0.0; 4], [0.0; 4], [0.0; 4]);
         // Sum the small terms first.
@@ -166,13 +176,13 @@ impl ExactMap {
         }
         // v(τ) = Σ_k r_k z (τ/h)^k with r_k the v row of T_k, so
         // ∫_0^h v² = h Σ_ij (r_i z)(r_j z) / (i + j + 1): the inner sums
-        // over j first, w[i] = Σ_j r_j / (i + j + 1).
+        // over j first, w[i] = Σ_j r_j / (i + j + 1) (zipped slices: no bounds checks).
         let mut q = [[0.0; 4]; 4];
         for i in (0..degree + 1).rev() {
-            let mut w = [0.0; 4];
-            for j in (0..degree + 1).rev() {
-                for (ws, r) in w.iter_mut().zip(rows[j][1]) {
-                    *ws += r * RECIPROCALS[i + j];
+            let (mut w, inv) = ([0.0; 4], &RECIPROCALS[i..i + degree + 1]);
+            for (row, inv) in rows[..degree + 1].iter().zip(inv).rev() {
+                for (ws, r) in w.iter_mut().zip(row[1]) {
+                    *ws += r * inv;
                 }
             }
             for r in 0..4 {
@@ -193,17 +203,15 @@ impl ExactMap {
             2.0 * q[1][3],
             2.0 * q[2][3],
         ];
-        // v^(m)(τ) = Σ_k e_v A^(m+k) z τ^k / k!, and e_v A^(m+k) is the v
-        // row of T_(m+k) times (m+k)! / h^(m+k): so over τ in [0, h]
-        // |v^(m)| <= h^-m Σ_i |z_i| Σ_k |T_(m+k)[v][i]| (m+k)! / k!.
-        // The sum stops at `degree + 6 - m` terms (the rest is below
-        // [`degree`]'s threshold of it); the factor covers rounding.
+        // v^(m)(τ) = Σ_k e_v A^(m+k) z τ^k / k!, and e_v A^(m+k) is the v row of T_(m+k) times
+        // (m+k)! / h^(m+k): so over τ in [0, h] |v^(m)| <= h^-m Σ_i |z_i| Σ_k |T_(m+k)[v][i]|
+        // (m+k)! / k!. The sum stops at `degree + 6 - m` terms (the rest is below [`degree`]'s
+        // threshold of it); the factor covers rounding.
         let mut bound = [[0.0; 4]; 5];
         for (b, m) in bound.iter_mut().zip(1..=5usize) {
-            for k in (0..n_terms - m + 1).rev() {
-                let falling = FALLING[m][k];
-                for i in 0..4 {
-                    b[i] += rows[m + k][1][i].abs() * falling;
+            for (row, falling) in rows[m..n_terms + 1].iter().zip(&FALLING[m]).rev() {
+                for (bs, r) in b.iter_mut().zip(row[1]) {
+                    *bs += r.abs() * falling;
                 }
             }
             let scale = (1.0 + 1e-6) / h.powi(m as i32);
@@ -271,9 +279,8 @@ pub(super) fn dot(a: &[f64; 4], z: &[f64; 4]) -> f64 {
     a[0] * z[0] + a[1] * z[1] + a[2] * z[2] + a[3] * z[3]
 }
 
-/// The maps a run uses, by cluster mass and canonical substep length: a
-/// mode's structure cluster has one of at most nine masses, and a record
-/// one or a few sample spacings.
+/// The maps a run uses, by cluster mass and canonical substep length: a mode's structure cluster
+/// has one of at most nine masses, and a record one or a few sample spacings.
 #[derive(Clone, Debug, Default)]
 pub(super) struct MapCache {
     maps: Vec<ExactMap>,
@@ -297,9 +304,8 @@ const CACHE_SIZE: usize = 16;
 impl MapCache {
     /// Index of the map for `mass` and canonical `h`, built if missing.
     pub(super) fn index(&mut self, sys: &System, mass: f64, h: f64) -> usize {
-        // The map of the previous call first: a mode's run and the next
-        // call of a master with a fixed step ask for it again.
-        // Bit for bit: the same equality as `==` on these (finite,
+        // The map of the previous call first: a mode's run and the next call of a master with a
+        // fixed step ask for it again. Bit for bit: the same equality as `==` on these (finite,
         // positive) values.
         let key = [mass.to_bits(), h.to_bits()];
         if self.keys.get(self.last) == Some(&key) {
@@ -362,9 +368,8 @@ impl MapCache {
         &self.maps[i]
     }
 
-    /// The degree of the event path's Taylor polynomials over a stretch of
-    /// length `h`: [`degree`] at the bare structure's rates (the highest of
-    /// any mode), remembered for a range of lengths.
+    /// The degree of the event path's Taylor polynomials over a stretch of length `h`: [`degree`]
+    /// at the bare structure's rates (the highest of any mode), remembered for a range of lengths.
     pub(super) fn stretch_degree(&mut self, sys: &System, h: f64) -> usize {
         let ([lo, hi], last) = self.last_degree;
         if lo <= h && h <= hi {
@@ -433,11 +438,10 @@ mod tests {
 
     #[test]
     fn derivative_bounds_hold_on_a_dense_grid() {
-        // Expected: |v^(m)(τ)| <= sup_v(m, z) at every τ of a 400-point grid
-        // of the substep, the derivatives taken from the exact state at τ
-        // (the map built for τ) through the equation of motion; and the
-        // bounds of v^(5) and v' through `five_over_three`, `one_over_three`. Several periods and
-        // dampings, states and forcings of every sign.
+        // Expected: |v^(m)(τ)| <= sup_v(m, z) at every τ of a 400-point grid of the substep, the
+        // derivatives taken from the exact state at τ (the map built for τ) through the equation of
+        // motion; and the bounds of v^(5) and v' through `five_over_three`, `one_over_three`.
+        // Several periods and dampings, states and forcings of every sign.
         let mut seed = 0x1234_5678_9abc_def0u64;
         let mut next = || {
             seed ^= seed << 13;
@@ -484,10 +488,9 @@ mod tests {
 
     #[test]
     fn the_map_of_a_prescribed_support_is_free_motion_with_no_nan() {
-        // Expected: w2 = cm = 0 and a cluster of no mass (the support with
-        // every block slipping): the exact rows of u'' = p + p' t, u =
-        // [1, h, h²/2, h³/6] and v = [0, 1, h, h²/2] (to rounding), every
-        // field finite, the ratios of the bounds 0.
+        // Expected: w2 = cm = 0 and a cluster of no mass (the support with every block slipping):
+        // the exact rows of u'' = p + p' t, u = [1, h, h²/2, h³/6] and v = [0, 1, h, h²/2] (to
+        // rounding), every field finite, the ratios of the bounds 0.
         let p = Params {
             n_blocks: 2,
             mp: 1.0,

@@ -57,32 +57,27 @@ impl Excitation {
     }
 }
 
-/// A source of consecutive linear pieces of excitation, each given by its
-/// end time and its excitation (values at its start). Any iterator of
-/// pieces is a source through [`Plain`].
+/// A source of consecutive linear pieces of excitation, each given by its end time and its
+/// excitation (values at its start). Any iterator of pieces is a source through [`Plain`].
 pub trait PieceSource {
     /// The next piece, or `None` at the end.
     fn next_piece(&mut self) -> Option<(f64, Excitation)>;
 
-    /// How many of the next pieces the source may promise to continue the
-    /// one it gave last, as a record's next samples do (each as long as
-    /// the last up to the rounding of the times, 1e-15 relative, `Fext`
-    /// held with a zero rate, every value finite): the driver takes them
-    /// with [`PieceSource::continuing`], keeping its substeps without
-    /// checking them again, and then tells the source with
-    /// [`PieceSource::skip`]. Lean methods of their own, so that the common
+    /// How many of the next pieces the source may promise to continue the one it gave last, as a
+    /// record's next samples do (each as long as the last up to the rounding of the times, 1e-15
+    /// relative, `Fext` held with a zero rate, every value finite): the driver takes them with
+    /// [`PieceSource::continuing`], keeping its substeps without checking them again, and then
+    /// tells the source with [`PieceSource::skip`]. Lean methods of their own, so that the common
     /// piece is built in registers, its place counted by the driver.
     #[inline(always)]
     fn promised(&self) -> usize {
         0
     }
 
-    /// Promised piece `k` (`k < promised()`): its end, `ag` and `ag_rate`
-    /// (`Fext` and its zero rate stay as they were), if it keeps the
-    /// promise; `None` takes nothing (the driver calls `skip` with the
-    /// pieces taken and asks `next_piece`), and asked again before that
-    /// answers `None` again. A source may move on as it gives a piece, or
-    /// leave that to `skip`.
+    /// Promised piece `k` (`k < promised()`): its end, `ag` and `ag_rate` (`Fext` and its zero rate
+    /// stay as they were), if it keeps the promise; `None` takes nothing (the driver calls `skip`
+    /// with the pieces taken and asks `next_piece`), and asked again before that answers `None`
+    /// again. A source may move on as it gives a piece, or leave that to `skip`.
     #[inline(always)]
     fn continuing(&mut self, _k: usize) -> Option<(f64, f64, f64)> {
         None
@@ -104,18 +99,16 @@ impl<I: Iterator<Item = (f64, Excitation)>> PieceSource for Plain<I> {
     }
 }
 
-/// An iterator of pieces as a [`PieceSource`] that promises each next
-/// piece and checks the promise as it gives it (the checks a record makes
-/// once for a stretch of samples): a piece that breaks it waits for
-/// `next_piece`, which the driver checks in full.
+/// An iterator of pieces as a [`PieceSource`] that promises each next piece and checks the promise
+/// as it gives it (the checks a record makes once for a stretch of samples): a piece that breaks it
+/// waits for `next_piece`, which the driver checks in full.
 pub struct CheckedPieces<I> {
     pieces: std::iter::Fuse<I>,
     waiting: Option<(f64, Excitation)>,
     /// A jump of `ag` breaks the promise (it moves a prescribed support).
     ag_continuous: bool,
-    /// The end of the last piece given, the length of the last given by
-    /// `next_piece` (NaN before the second: no promise), `Fext` if held
-    /// (NaN if not: no promise) and `ag` at that end.
+    /// The end of the last piece given, the length of the last given by `next_piece` (NaN before
+    /// the second: no promise), `Fext` if held (NaN if not: no promise) and `ag` at that end.
     end: f64,
     length: f64,
     fext: f64,
@@ -123,9 +116,8 @@ pub struct CheckedPieces<I> {
 }
 
 impl<I: Iterator> CheckedPieces<I> {
-    /// The pieces of `pieces` up to its first `None` for a scene of `sys`,
-    /// the first to be checked in full; on a prescribed support a jump of
-    /// `ag` breaks the promise (it moves the support).
+    /// The pieces of `pieces` up to its first `None` for a scene of `sys`, the first to be checked
+    /// in full; on a prescribed support a jump of `ag` breaks the promise (it moves the support).
     pub fn new(pieces: I, sys: &System) -> CheckedPieces<I> {
         CheckedPieces {
             pieces: pieces.fuse(),
@@ -224,10 +216,9 @@ impl Piece {
         }
     }
 
-    /// A copy read one field at a time: a caller has just written the
-    /// piece field by field, and a wider load across two such stores waits
-    /// for them to reach the cache (a store-forwarding stall: 6-8 % of a
-    /// one-substep call, measured; the bare structure's record path +2 %).
+    /// A copy read one field at a time: a caller has just written the piece field by field, and a
+    /// wider load across two such stores waits for them to reach the cache (a store-forwarding
+    /// stall: 6-8 % of a one-substep call, measured; the bare structure's record path +2 %).
     #[inline(always)]
     pub(super) fn read_by_field(&self) -> Piece {
         // SAFETY: fields of a live reference (volatile: never merged wider).
@@ -249,9 +240,8 @@ impl Piece {
         }
     }
 
-    /// Whether a piece from `t_ref` to `t_end` is as long as this one up to
-    /// the rounding of their times (a record's next sample): it then keeps
-    /// this one's substeps.
+    /// Whether a piece from `t_ref` to `t_end` is as long as this one up to the rounding of their
+    /// times (a record's next sample): it then keeps this one's substeps.
     #[inline(always)]
     pub(super) fn same_length(&self, t_ref: f64, t_end: f64) -> bool {
         self.n > 0 && continues_as_long(t_ref, t_end, self.t_end - self.t_ref)
@@ -268,9 +258,8 @@ impl Piece {
     }
 }
 
-/// The default's fine stretches where the exact event path
-/// (`exact_events`) cannot decide a substep within its budget (a guard
-/// hovering at rounding level): `h ω_p <= 0.01` and `h <= 0.625 ms`, so
+/// The default's fine stretches where the exact event path (`exact_events`) cannot decide a substep
+/// within its budget (a guard hovering at rounding level): `h ω_p <= 0.01` and `h <= 0.625 ms`, so
 /// that such a substep stays below 1e-9 of the peaks (docs/accuracy-speed.md, "Accuracy").
 pub const FINE_H_OMEGA: f64 = 0.01;
 /// See [`FINE_H_OMEGA`].
@@ -289,9 +278,8 @@ pub fn same_up_to_rounding(length: f64, other: f64, t_end: f64) -> bool {
     (length - other).abs() <= 1e-15 * (t_end.abs() + other)
 }
 
-/// Whether the terms of `sum` were all finite (a sum that is not: a bad
-/// value, or finite ones overflowing): `x - x` is 0 exactly where `x` is
-/// finite, one subtraction.
+/// Whether the terms of `sum` were all finite (a sum that is not: a bad value, or finite ones
+/// overflowing): `x - x` is 0 exactly where `x` is finite, one subtraction.
 #[inline(always)]
 #[allow(clippy::eq_op)]
 pub fn finite_terms(sum: f64) -> bool {
@@ -306,9 +294,8 @@ fn continues_as_long(t_start: f64, t_end: f64, other: f64) -> bool {
     t_end > t_start && same_up_to_rounding(t_end - t_start, other, t_end)
 }
 
-/// Whether `Fext` moving from `before` to `after` at an instant is a jump
-/// (which can break a stick), not the rounding of a ramp carried across
-/// pieces.
+/// Whether `Fext` moving from `before` to `after` at an instant is a jump (which can break a
+/// stick), not the rounding of a ramp carried across pieces.
 #[inline(always)]
 pub(super) fn is_jump(after: f64, before: f64) -> bool {
     (after - before).abs() > 1e-12 * after.abs().max(before.abs())

@@ -17,11 +17,10 @@ use super::exact_map::{ExactMap, MAP_H_OMEGA};
 use super::Simulator;
 use crate::physics::hermite;
 
-/// Raises `peak` to the largest `|y|` over a substep of length `h` with end
-/// values `y0`, `y1` and rates `d0`, `d1`, when that can be proved from the
-/// ends: `fourth` bounds `|y''''|` over the substep and `third()` `|y'''|`.
-/// False when a new peak inside the substep cannot be excluded (the caller
-/// then takes the substep on the general path).
+/// Raises `peak` to the largest `|y|` over a substep of length `h` with end values `y0`, `y1` and
+/// rates `d0`, `d1`, when that can be proved from the ends: `fourth` bounds `|y''''|` over the
+/// substep and `third()` `|y'''|`. False when a new peak inside the substep cannot be excluded (the
+/// caller then takes the substep on the general path).
 #[inline(always)]
 pub(super) fn raise_peak_proved(
     peak: &mut f64,
@@ -38,9 +37,8 @@ pub(super) fn raise_peak_proved(
     if ends + 4.0 / 27.0 * h * (d0.abs() + d1.abs()) + rest <= *peak {
         return true;
     }
-    // Monotone: y' stays within h²/8 sup|y'''| of its linear interpolation,
-    // so it keeps its sign when both ends exceed that (a peak rising with
-    // the motion, the usual case here).
+    // Monotone: y' stays within h²/8 sup|y'''| of its linear interpolation, so it keeps its sign
+    // when both ends exceed that (a peak rising with the motion, the usual case here).
     if d0 * d1 > 0.0 && d0.abs().min(d1.abs()) > 0.125 * h2 * third() {
         if ends > *peak {
             *peak = ends;
@@ -57,11 +55,10 @@ fn cubic_below(peak: f64, [y0, d0, y1, d1]: [f64; 4], h: f64, rest: f64) -> bool
     hermite::max_abs(y0, d0, y1, d1, h) + rest <= peak
 }
 
-/// How long a guard linear in time, `g0 + rate t` (`t` in the rate's
-/// unit), stays positive from its start: `INFINITY` where it never falls,
-/// `0` where it is not positive just after the start (at zero it must
-/// grow). A guard between two clusters above the structure's is linear:
-/// their absolute accelerations are constant in a mode.
+/// How long a guard linear in time, `g0 + rate t` (`t` in the rate's unit), stays positive from its
+/// start: `INFINITY` where it never falls, `0` where it is not positive just after the start (at
+/// zero it must grow). A guard between two clusters above the structure's is linear: their absolute
+/// accelerations are constant in a mode.
 #[inline(always)]
 pub(super) fn linear_guard_lasts(g0: f64, rate: f64) -> f64 {
     if g0 >= 0.0 && rate >= 0.0 && g0 + rate > 0.0 {
@@ -118,10 +115,9 @@ pub(super) fn slip_guard_proved(
     }
 }
 
-/// Raises the structure's peaks of |u0| and |A0| over the substep from `z`
-/// (with `|z|`; end values `u1`, `v1`; the absolute acceleration `a0` and
-/// `a1` at the ends, its rates `jerks()`) where that is proved; returns
-/// which were: quick tests first ([`peaks_quick`]), then the cubic bounds.
+/// Raises the structure's peaks of |u0| and |A0| over the substep from `z` (with `|z|`; end values
+/// `u1`, `v1`; the absolute acceleration `a0` and `a1` at the ends, its rates `jerks()`) where that
+/// is proved; returns which were: quick tests first ([`peaks_quick`]), then the cubic bounds.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn structure_peaks_proved(
@@ -183,12 +179,11 @@ pub(super) fn energy_run(
     cost <= lim - (v * v + w2 * (u * u)).sqrt() * (1.0 + 1e-9)
 }
 
-/// Whether `g > 0` over `(0, h]` is proved from its ends (values `g0`, `g1`,
-/// rates `d0`, `d1`) and `|g''| <= m2`: Taylor's bound from the start,
-/// `g(τ) >= g0 + d0 τ - m2 τ²/2`, is positive up to its root `r0`, and the
-/// one from the end up to `h - r1`; together they cover the substep when
-/// `r0 + r1 > h`. This admits a guard that starts at zero and grows (a
-/// contact that has just switched), which the interpolation bound cannot.
+/// Whether `g > 0` over `(0, h]` is proved from its ends (values `g0`, `g1`, rates `d0`, `d1`) and
+/// `|g''| <= m2`: Taylor's bound from the start, `g(τ) >= g0 + d0 τ - m2 τ²/2`, is positive up to
+/// its root `r0`, and the one from the end up to `h - r1`; together they cover the substep when
+/// `r0 + r1 > h`. This admits a guard that starts at zero and grows (a contact that has just
+/// switched), which the interpolation bound cannot.
 #[inline(never)]
 pub(super) fn stays_positive([g0, d0, g1, d1]: [f64; 4], h: f64, m2: f64) -> bool {
     // Length over which `g + d τ - m2 τ²/2` stays positive from τ = 0+.
@@ -206,18 +201,16 @@ pub(super) fn stays_positive([g0, d0, g1, d1]: [f64; 4], h: f64, m2: f64) -> boo
     g1 > 0.0 && reach(g0, d0) + reach(g1, -d1) > h
 }
 
-/// The longest substep of the exact default on a prescribed support (s): a
-/// record's sample (5-20 ms) is then one substep, and the proofs' bounds
-/// (`h²/8 |ag'|` on a slip's rate) stay tight.
+/// The longest substep of the exact default on a prescribed support (s): a record's sample (5-20
+/// ms) is then one substep, and the proofs' bounds (`h²/8 |ag'|` on a slip's rate) stay tight.
 pub const PRESCRIBED_MAX_STEP: f64 = 0.02;
 
 impl Simulator {
-    /// The longest substep of the exact default: `ω h = MAP_H_OMEGA`, or
-    /// `maxStep` where that is shorter (the default stays exact at any
-    /// `maxStep`; a shorter one only costs more substeps). On a prescribed
-    /// support (no spring, ω = 0) every motion in a piece is a polynomial of
-    /// degree 3 at most and the proofs hold at any length: the substep is
-    /// [`PRESCRIBED_MAX_STEP`], or `maxStep` where shorter.
+    /// The longest substep of the exact default: `ω h = MAP_H_OMEGA`, or `maxStep` where that is
+    /// shorter (the default stays exact at any `maxStep`; a shorter one only costs more substeps).
+    /// On a prescribed support (no spring, ω = 0) every motion in a piece is a polynomial of degree
+    /// 3 at most and the proofs hold at any length: the substep is [`PRESCRIBED_MAX_STEP`], or
+    /// `maxStep` where shorter.
     pub(super) fn map_step(&self) -> f64 {
         let h = if self.sys.omega_p > 0.0 {
             MAP_H_OMEGA / self.sys.omega_p
@@ -261,10 +254,9 @@ mod tests {
 
     #[test]
     fn a_peak_inside_the_substep_is_not_passed_over() {
-        // Expected: y = sin(τ) over [0, 2] peaks at 1 (τ = π/2), inside:
-        // from a running peak of 0.95 the substep is handed back (false);
-        // from 1 plus the remainder bound it is proved (true). |y'''| and
-        // |y''''| are at most 1.
+        // Expected: y = sin(τ) over [0, 2] peaks at 1 (τ = π/2), inside: from a running peak of
+        // 0.95 the substep is handed back (false); from 1 plus the remainder bound it is proved
+        // (true). |y'''| and |y''''| are at most 1.
         let ends = [0.0, 1.0, 2f64.sin(), 2f64.cos()];
         let mut peak = 0.95;
         assert!(!raise_peak_proved(&mut peak, ends, 2.0, 1.0, || 1.0));
