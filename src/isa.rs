@@ -37,7 +37,8 @@ pub fn wide_registers() -> bool {
 /// `twice!(fn name / wide / body (&mut self, args) -> R)` defines the method
 /// `name`, which runs the method `body` (`#[inline(always)]`, written out
 /// elsewhere) compiled for AVX-512 as `wide` where the processor has it,
-/// else as it is.
+/// else as it is; `twice!(fn name / wide / path::to::body (args) -> R)` the
+/// same for a function.
 macro_rules! twice {
     (
         $(#[$attr:meta])*
@@ -63,7 +64,30 @@ macro_rules! twice {
             self.$body $(::<$($cg),*>)? ($($arg),*)
         }
     };
+    (
+        $(#[$attr:meta])*
+        $vis:vis fn $name:ident / $wide:ident / $($body:ident)::+ ($($arg:ident : $aty:ty),*) -> $ret:ty
+    ) => {
+        $(#[$attr])*
+        #[inline(never)]
+        $vis fn $name($($arg: $aty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            if $crate::isa::wide_registers() {
+                // SAFETY: the processor has the features (just checked).
+                return unsafe { $wide($($arg),*) };
+            }
+            $($body)::+($($arg),*)
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f,avx512vl")]
+        #[inline(never)]
+        unsafe fn $wide($($arg: $aty),*) -> $ret {
+            $($body)::+($($arg),*)
+        }
+    };
 }
+pub(crate) use twice;
 
 // The engine's two hottest functions (with everything they inline): the
 // driver's runs of substeps and the event path's stretches. Their callees

@@ -277,22 +277,11 @@ impl RecordPieces<'_> {
     }
 }
 
-/// The first sample from `k >= 1` on (`stop` at most) whose interval is not `dt` long up to the
-/// rounding of the times; compiled for AVX-512 too (eight samples to a register), as the engine's
-/// hot functions are (`crate::isa`): the same comparisons either way.
-fn uniform_end(time: &[f64], dt: f64, stop: usize, k: usize) -> usize {
-    #[cfg(target_arch = "x86_64")]
-    if crate::isa::wide_registers() {
-        // SAFETY: the processor has the features (just checked).
-        return unsafe { uniform_end_wide(time, dt, stop, k) };
-    }
-    uniform_end_of(time, dt, stop, k)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl")]
-unsafe fn uniform_end_wide(time: &[f64], dt: f64, stop: usize, k: usize) -> usize {
-    uniform_end_of(time, dt, stop, k)
+crate::isa::twice! {
+    /// The first sample from `k >= 1` on (`stop` at most) whose interval is not `dt` long up to
+    /// the rounding of the times; compiled twice (`crate::isa`: eight samples to a register), the
+    /// same comparisons either way.
+    fn uniform_end / uniform_end_wide / uniform_end_of (time: &[f64], dt: f64, stop: usize, k: usize) -> usize
 }
 
 #[inline(always)]

@@ -124,22 +124,16 @@ pub(super) struct ExactMap {
     pub(super) rows_rate: Rows,
 }
 
-impl ExactMap {
-    /// Builds the map of the cluster of mass `mass` over `h` (already canonical); compiled for
-    /// AVX-512 too (a row's four terms to a register), the same operations either way.
-    pub(super) fn new(sys: &System, mass: f64, h: f64) -> ExactMap {
-        #[cfg(target_arch = "x86_64")]
-        if crate::isa::wide_registers() {
-            // SAFETY: the processor has the features (just checked).
-            return unsafe { ExactMap::new_wide(sys, mass, h) };
-        }
-        ExactMap::build(sys, mass, h)
-    }
+crate::isa::twice! {
+    /// [`ExactMap::build`], compiled twice.
+    fn new_map / new_map_wide / ExactMap::build (sys: &System, mass: f64, h: f64) -> ExactMap
+}
 
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512vl")]
-    unsafe fn new_wide(sys: &System, mass: f64, h: f64) -> ExactMap {
-        ExactMap::build(sys, mass, h)
+impl ExactMap {
+    /// Builds the map of the cluster of mass `mass` over `h` (already canonical); compiled twice
+    /// (`crate::isa`: a row's four terms to a register), the same operations either way.
+    pub(super) fn new(sys: &System, mass: f64, h: f64) -> ExactMap {
+        new_map(sys, mass, h)
     }
 
     #[inline(always)]
