@@ -6,7 +6,7 @@
 
 use stacked_live_load::fmi::c_api::fmi3::*;
 use stacked_live_load::fmi::c_api::*;
-use std::ffi::{c_void, CStr, CString};
+use std::ffi::{c_char, c_void, CStr, CString};
 use std::ptr::{null, null_mut};
 
 const OK: i32 = 0;
@@ -15,8 +15,8 @@ const ERROR: i32 = 3;
 unsafe extern "C" fn logger(
     env: *mut c_void,
     _status: i32,
-    _category: *const i8,
-    message: *const i8,
+    _category: *const c_char,
+    message: *const c_char,
 ) {
     let log = &mut *(env as *mut Vec<String>);
     log.push(CStr::from_ptr(message).to_string_lossy().into_owned());
