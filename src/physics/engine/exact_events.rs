@@ -581,16 +581,16 @@ impl Simulator {
         // keeps its direction over the stretch: it peaks at an end. The others' peaks can fail:
         // taken first, in copies (no copy of every slip's peak and work per stretch).
         let (watched, mut raised) = (d.changing_guards & !muted, [0.0; MAX_BODIES]);
-        let mut unwatched = self.mode.cluster_ends() & self.sys.interfaces() & !watched;
-        while unwatched != 0 {
-            let j = unwatched.trailing_zeros() as usize;
-            unwatched &= unwatched - 1;
-            let (hi, lo) = (d.cluster_of[j], d.cluster_of[j - 1]);
+        for m in d.moving[..d.n_moving]
+            .iter()
+            .filter(|m| watched & (1 << m.j) == 0)
+        {
+            let (j, hi, lo) = (m.j, m.hi, m.lo);
             let slip0 = self.u[j] - self.u[j - 1];
             let vrel = [self.v[j] - self.v[j - 1], v_end[hi] - v_end[lo]];
             let ends = [[slip0, slip0 + du[hi] - du[lo]], vrel];
             raised[j] = self.peak_slip[j];
-            self.raise_unwatched_slip(&mut raised[j], flow, Moving { j, hi, lo }, ends, how)?;
+            self.raise_unwatched_slip(&mut raised[j], flow, *m, ends, how)?;
         }
         // Friction's work: the constant force times the slip.
         for m in &d.moving[..d.n_moving] {
