@@ -18,8 +18,8 @@
 //!   call, beside the FMI API (for parametric studies).
 //!
 //! [`limits`] holds the bounds that keep an instance safe inside its host
-//! process; all rooms read them. [`isa`] compiles the engine's two hottest
-//! functions a second time for AVX-512 and picks the copy at each call (the
+//! process; all rooms read them. [`isa`] compiles the engine's hottest
+//! functions for AVX2 and AVX-512 too and picks the copy at each call (the
 //! same results bit for bit).
 
 #![warn(missing_docs)]

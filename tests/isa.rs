@@ -1,12 +1,14 @@
-//! The engine's AVX-512 copies (`stacked_live_load::isa`) against its
-//! baseline x86-64 code: the same IEEE operations in the same order, so every
-//! output must agree bit for bit. On a processor without AVX-512 both runs
-//! take the baseline code (the test says so and still runs them).
+//! The engine's AVX2 and AVX-512 copies (`stacked_live_load::isa`) against
+//! its baseline x86-64 code: the same IEEE operations in the same order, so
+//! every output must agree bit for bit. A copy the processor lacks is not run
+//! (the test says so); the baseline is compared with every one it has.
 mod common;
 
 use common::Rng;
 use stacked_live_load::{
-    ground::record, isa, Excitation, Outputs, Params, Settings, Simulator, Support,
+    ground::record,
+    isa::{self, Isa},
+    Excitation, Outputs, Params, Settings, Simulator, Support,
 };
 
 /// A random stack of `n` blocks, mus >= muk (equal on about half of the
@@ -72,10 +74,12 @@ fn master_inputs(rng: &mut Rng, duration: f64, mass: f64) -> Vec<(f64, Excitatio
 }
 
 #[test]
-fn the_avx512_copies_give_the_baselines_results_bit_for_bit() {
-    if !isa::wide_registers_available() {
-        eprintln!("no AVX-512 here: both runs take the baseline code");
-    }
+fn the_wider_copies_give_the_baselines_results_bit_for_bit() {
+    let wider: Vec<Isa> = [Isa::Avx2, Isa::Avx512]
+        .into_iter()
+        .filter(|&w| w <= isa::available())
+        .collect();
+    eprintln!("copies compared with the baseline here: {wider:?}");
     // Fresh seeded inputs: broadband records at three spacings, random
     // scenes of 0..8 blocks (mus >= muk), and the bench's stacks.
     let mut rng = common::Rng(0x15a_2026);
@@ -94,15 +98,22 @@ fn the_avx512_copies_give_the_baselines_results_bit_for_bit() {
         .iter()
         .map(|&dt| common::broadband_record(&mut rng, 8.0, dt))
         .collect();
+    // Each copy's outputs, then the widest allowed again.
+    let with = |copy: Isa, run: &dyn Fn() -> String| {
+        isa::allow_up_to(copy);
+        assert_eq!(isa::chosen(), copy);
+        let out = run();
+        isa::allow_up_to(Isa::Avx512);
+        out
+    };
     for (i, p) in scenes.iter().enumerate() {
         for gm in &records {
-            isa::allow_wide_registers(true);
-            let wide = outputs(p, gm);
-            isa::allow_wide_registers(false);
-            let narrow = outputs(p, gm);
-            isa::allow_wide_registers(true);
             // Debug formatting prints every f64 exactly (shortest round trip).
-            assert_eq!(format!("{wide:?}"), format!("{narrow:?}"), "scene {i}");
+            let run = || format!("{:?}", outputs(p, gm));
+            let baseline = with(Isa::Baseline, &run);
+            for &copy in &wider {
+                assert_eq!(with(copy, &run), baseline, "scene {i}, {copy:?}");
+            }
         }
         // A master's inputs with slopes and jumps (no `Fext` on a support).
         let mut inputs = master_inputs(&mut rng, 6.0, p.mp);
@@ -111,14 +122,18 @@ fn the_avx512_copies_give_the_baselines_results_bit_for_bit() {
                 .iter_mut()
                 .for_each(|(_, e)| (e.fext, e.fext_rate) = (0.0, 0.0));
         }
-        let run = |wide: bool| {
-            isa::allow_wide_registers(wide);
+        let run = || {
             let mut sim = Simulator::new(p, &Settings::default()).unwrap();
             sim.advance_pieces(inputs.iter().copied()).unwrap();
             format!("{:?}", sim.outputs())
         };
-        let (wide, narrow) = (run(true), run(false));
-        isa::allow_wide_registers(true);
-        assert_eq!(wide, narrow, "scene {i}, a master's inputs");
+        let baseline = with(Isa::Baseline, &run);
+        for &copy in &wider {
+            assert_eq!(
+                with(copy, &run),
+                baseline,
+                "scene {i}, a master's inputs, {copy:?}"
+            );
+        }
     }
 }

@@ -277,11 +277,12 @@ impl RecordPieces<'_> {
     }
 }
 
-crate::isa::twice! {
+crate::isa::copies! {
     /// The first sample from `k >= 1` on (`stop` at most) whose interval is not `dt` long up to
-    /// the rounding of the times; compiled twice (`crate::isa`: eight samples to a register), the
-    /// same comparisons either way.
-    fn uniform_end / uniform_end_wide / uniform_end_of (time: &[f64], dt: f64, stop: usize, k: usize) -> usize
+    /// the rounding of the times; compiled per instruction set (`crate::isa`: eight samples to a
+    /// register on AVX-512), the same comparisons in each.
+    fn uniform_end / uniform_end_avx2, uniform_end_avx512 / uniform_end_of
+        (time: &[f64], dt: f64, stop: usize, k: usize) -> usize
 }
 
 #[inline(always)]

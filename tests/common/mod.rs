@@ -1083,16 +1083,24 @@ pub fn graded_stack_static_above_kinetic() -> stacked_live_load::Params {
     p
 }
 
-/// For the benches and timing examples: `NARROW=1` runs the engine's
-/// baseline x86-64 copy even where its AVX-512 copy could
-/// (`stacked_live_load::isa`); returns the name of the copy that runs.
+/// For the benches and timing examples: `NARROW=1` (or `ISA=baseline`) runs
+/// the engine's baseline x86-64 copy even where a wider one could, `ISA=avx2`
+/// at most its AVX2 copy (`stacked_live_load::isa`); returns the name of the
+/// copy that runs.
 pub fn engine_copy_from_env() -> &'static str {
+    use stacked_live_load::isa::{self, Isa};
     let narrow = std::env::var("NARROW").is_ok_and(|v| v == "1");
-    stacked_live_load::isa::allow_wide_registers(!narrow);
-    if stacked_live_load::isa::wide_registers() {
-        "AVX-512"
-    } else {
-        "baseline x86-64"
+    let limit = match std::env::var("ISA").as_deref() {
+        _ if narrow => Isa::Baseline,
+        Ok("baseline") => Isa::Baseline,
+        Ok("avx2") => Isa::Avx2,
+        _ => Isa::Avx512,
+    };
+    isa::allow_up_to(limit);
+    match isa::chosen() {
+        Isa::Avx512 => "AVX-512",
+        Isa::Avx2 => "AVX2",
+        Isa::Baseline => "baseline x86-64",
     }
 }
 

@@ -124,14 +124,15 @@ pub(super) struct ExactMap {
     pub(super) rows_rate: Rows,
 }
 
-crate::isa::twice! {
-    /// [`ExactMap::build`], compiled twice.
-    fn new_map / new_map_wide / ExactMap::build (sys: &System, mass: f64, h: f64) -> ExactMap
+crate::isa::copies! {
+    /// [`ExactMap::build`], compiled three times.
+    fn new_map / new_map_avx2, new_map_avx512 / ExactMap::build
+        (sys: &System, mass: f64, h: f64) -> ExactMap
 }
 
 impl ExactMap {
-    /// Builds the map of the cluster of mass `mass` over `h` (already canonical); compiled twice
-    /// (`crate::isa`: a row's four terms to a register), the same operations either way.
+    /// Builds the map of the cluster of mass `mass` over `h` (already canonical); compiled for
+    /// each instruction set (`crate::isa`: a row's four terms to a register), the same operations.
     pub(super) fn new(sys: &System, mass: f64, h: f64) -> ExactMap {
         new_map(sys, mass, h)
     }
