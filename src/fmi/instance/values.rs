@@ -129,7 +129,7 @@ impl Instance {
                 Id::NBlocks if (lowest..=MAX_BLOCKS as i32).contains(&x) => None,
                 Id::NBlocks => Some(format!("nBlocks = {x} is not allowed: it must be an integer from {lowest} to {MAX_BLOCKS}")),
                 Id::Solver if SolverKind::from_code(x).is_some() => None,
-                Id::Solver => Some(format!("solver = {x} is not allowed: it must be 1 (event-located RK4), 2 (step-end switching) or 3 (tanh-regularized friction)")),
+                Id::Solver => Some(format!("solver = {x} is not allowed: it must be 1 (exact, the default), 2 (RK4 switching at step ends) or 3 (tanh-regularized friction)")),
                 _ => Some(format!("{} is not an Integer", name_of(id))),
             };
             if let Some(message) = problem {

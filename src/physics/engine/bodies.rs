@@ -5,8 +5,8 @@
 use super::*;
 
 /// A cluster above the structure's over a step of length `h`: its absolute
-/// acceleration is constant in the mode, so RK4 gives it exactly its Taylor
-/// polynomial, and Simpson's rule, exact for it, its input work. Returns
+/// acceleration is constant in the mode, so with `ag` linear its velocity
+/// is a quadratic, and Simpson's rule, exact for the work's cubic, its input work. Returns
 /// (displacement increment, end velocity, input work) from velocity `v`.
 #[inline]
 pub(crate) fn upper_cluster_step(

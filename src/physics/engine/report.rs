@@ -82,7 +82,7 @@ impl std::error::Error for SimError {}
 /// Counters of what the solver did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Stats {
-    /// Internal RK4 steps accepted (segments between events count separately).
+    /// Internal substeps taken (a substep's stretches between events count separately).
     pub steps: u64,
     /// Mode switches.
     pub events: u64,
