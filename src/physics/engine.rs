@@ -399,7 +399,8 @@ impl Simulator {
                     pending = pieces.next_piece();
                 }
             }
-            self.end_piece(&piece);
+            // The inputs at the piece's end (inside it, set where read: `fire_violated`).
+            (self.ag_now, self.fext_now) = piece.exc.at(piece.t_end - piece.t_ref);
             let exact = self.settings.method == Method::EventLocated;
             if exact && pending.is_none() && self.sys.prescribed() {
                 self.settle_at_end(&piece);
@@ -452,7 +453,6 @@ impl Simulator {
         {
             self.fire_at_jump(exc);
         }
-        self.take_inputs_now(exc, self.t);
         Ok(Piece::new(self.t, t_end, exc, self.h_max))
     }
 
@@ -463,11 +463,6 @@ impl Simulator {
     fn fire_at_jump(&mut self, exc: &Excitation) {
         let candidates = self.violated_at_jump(exc);
         self.fire_violated(exc, self.t, candidates, 0);
-    }
-
-    /// The inputs at the end of a finished piece.
-    fn end_piece(&mut self, piece: &Piece) {
-        (self.ag_now, self.fext_now) = piece.exc.at(piece.t_end - piece.t_ref);
     }
 
     /// For the step-end baseline (`crate::baselines::step_end`) at a

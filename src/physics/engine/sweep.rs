@@ -457,8 +457,11 @@ impl Simulator {
                 self.e_friction[j] += friction_work(d.slip_force[j], end - start);
                 let peak = &mut self.peak_slip[j];
                 if slip_sign[m] != 0.0 {
-                    // Its guard held: it kept its direction.
-                    *peak = peak.max(start.abs()).max(end.abs());
+                    // Its guard held: it kept its direction. (Not `f64::max`: no NaN's case.)
+                    let hi = if end.abs() > start.abs() { end } else { start }.abs();
+                    if hi > *peak {
+                        *peak = hi;
+                    }
                 } else if m == 0 {
                     *peak = peak_slip0;
                 } else {
