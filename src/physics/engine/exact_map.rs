@@ -339,7 +339,7 @@ impl MapCache {
     }
 
     /// Where [`MapCache::rows`] keeps them.
-    #[inline(never)]
+    #[inline(always)]
     fn rows_slot(&mut self, sys: &System, mass: f64, h: f64) -> usize {
         let key = [!mass.to_bits(), h.to_bits()];
         // Fibonacci hashing: the lengths differ in their low bits.
