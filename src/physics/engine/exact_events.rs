@@ -197,7 +197,8 @@ struct Flow {
 impl Flow {
     /// Starts the stretch of length `h` from the simulator's state, with
     /// Taylor polynomials of degree `deg` (filled in place: a flow is three
-    /// arrays of coefficients).
+    /// arrays of coefficients; in line: each `crate::isa` copy has its own).
+    #[inline(always)]
     fn start(&mut self, sim: &Simulator, exc: &Excitation, t_ref: f64, h: f64, deg: usize) {
         let (sys, d) = (&sim.sys, &sim.dynamics);
         let inv_mass = d.inv_mass0;
