@@ -797,10 +797,11 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
         .unwrap_or_else(|| resolve_by_walk(sys, req))
 }
 
-/// [`resolve`] for a cascade with mus = muk: from all of `zero` stuck (as
-/// tried already but where a stick must break), the stick most over its
-/// static limit slips the way its force drives it, until the contact law
-/// holds: the walk's assignment where [`only_consistent`] proves it unique.
+/// [`resolve`] for a cascade with mus = muk: from all of `zero` stuck (where
+/// none must break, level 0 of [`resolve_most_stuck`], taken as it is), the
+/// stick most over its static limit slips the way its force drives it, until
+/// the contact law holds: the walk's assignment where [`only_consistent`]
+/// proves it unique.
 #[inline(never)]
 fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let (zero, mut mode) = (req.zero & !sys.free, req.mode);
@@ -808,7 +809,7 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     sys.equal_friction(zero).then_some(())?;
     ifaces().for_each(|j| mode.contact[j] = Contact::Stuck);
     for tries in 1..zero.count_ones() + 2 {
-        if (tries > 1 || zero & req.must_break != 0) && consistent(sys, &mode, zero, req.load0) {
+        if consistent(sys, &mode, zero, req.load0) {
             let (consistent, ambiguous) = (true, false);
             let res = Resolved {
                 mode,
@@ -816,7 +817,8 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
                 ambiguous,
                 tries,
             };
-            return only_consistent(sys, &mode, zero, req.load0, zero).then_some(res);
+            let first = tries == 1 && zero & req.must_break == 0;
+            return (first || only_consistent(sys, &mode, zero, req.load0, zero)).then_some(res);
         }
         let (mut j, mut x) = (0, 1.0f64);
         let mut last = (0, 0.0);
@@ -869,7 +871,9 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) -> Option<Resolved> {
     let zero = req.zero & !sys.free;
     let breaking = zero & req.must_break;
-    if breaking.count_ones() > 2 {
+    // Level 0 with mus = muk and none breaking (all stuck) is the cascade's first try.
+    let cascade = levels.start == 0 && breaking == 0 && sys.equal_friction(zero);
+    if breaking.count_ones() > 2 || cascade {
         return None;
     }
     let mut stuck = req.mode;
