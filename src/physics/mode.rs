@@ -639,8 +639,9 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
 ///
 /// The interfaces are taken from the bottom up and the search stops once
 /// the violation exceeds `enough`: a caller that only asks whether the law
-/// holds passes `CONSISTENCY_TOL` (most clusters a walk tries fail at
-/// once), one that ranks violations `f64::INFINITY` (the largest).
+/// holds passes `CONSISTENCY_TOL` (most clusters a walk tries fail at once;
+/// a stick within its limit, violation <= 0, is passed over), one that
+/// ranks violations `f64::INFINITY` (the largest).
 #[inline(always)]
 fn cluster_law(
     sys: &System,
@@ -684,7 +685,9 @@ fn cluster_law(
         inside &= inside - 1;
         let limit = sys.mus[i] * sys.normal[i];
         let force = sys.mass_down[i][end] * accel + f_top;
-        worst = worst.max((force.abs() - limit) / limit);
+        if force.abs() > limit || enough == f64::INFINITY {
+            worst = worst.max((force.abs() - limit) / limit);
+        }
     }
     (accel, worst)
 }
