@@ -293,17 +293,19 @@ impl DynamicsCache {
     pub(super) fn load(&mut self, sys: &System, mode: &Mode, out: &mut Dynamics) {
         let key = DynamicsCache::key(mode);
         let slot = DynamicsCache::slot(key);
-        let hinted = usize::from(self.hint[slot]);
-        if hinted != 0 && self.keys[hinted - 1] == key {
-            *out = self.dynamics[hinted - 1];
-            return;
+        // Never hinted: no entry has this slot (hints are cleared only with the entries).
+        let found = match usize::from(self.hint[slot]) {
+            0 => None,
+            hinted if self.keys[hinted - 1] == key => Some(hinted - 1),
+            _ => self.keys.iter().position(|&k| k == key),
+        };
+        match found {
+            Some(i) => {
+                self.hint[slot] = (i + 1) as u8;
+                *out = self.dynamics[i];
+            }
+            None => self.insert(key, sys, mode, out),
         }
-        if let Some(i) = self.keys.iter().position(|&k| k == key) {
-            self.hint[slot] = (i + 1) as u8;
-            *out = self.dynamics[i];
-            return;
-        }
-        self.insert(key, sys, mode, out);
     }
 
     /// A mode met for the first time: its dynamics built, kept and copied
