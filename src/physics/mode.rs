@@ -637,10 +637,9 @@ fn consistent(sys: &System, mode: &Mode, zero: u32, load0: f64) -> bool {
 /// from the interface above) moves by [`support_law`] (`load0 = ag`), as
 /// the integrators move it afterwards.
 ///
-/// The interfaces are taken from the bottom up and the search stops once
-/// the violation exceeds `enough`: a caller that only asks whether the law
-/// holds passes `CONSISTENCY_TOL` (most clusters a walk tries fail at once;
-/// a stick within its limit, violation <= 0, is passed over), one that
+/// The interfaces are taken from the bottom up and the search stops once the violation exceeds
+/// `enough`: a caller that only asks whether the law holds passes `CONSISTENCY_TOL` (most clusters
+/// a walk tries fail at once; a stick within its limit, violation <= 0, is passed over), one that
 /// ranks violations `f64::INFINITY` (the largest).
 #[inline(always)]
 fn cluster_law(
@@ -800,17 +799,15 @@ pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
         .unwrap_or_else(|| resolve_by_walk(sys, req))
 }
 
-/// [`resolve`] for a cascade with mus = muk: from all of `zero` stuck (where
-/// none must break, level 0 of [`resolve_most_stuck`], taken as it is), the
-/// stick most over its static limit slips the way its force drives it, until
-/// the contact law holds: the walk's assignment where [`only_consistent`]
-/// proves it unique.
+/// [`resolve`] for a cascade with mus = muk: from all of `zero` stuck (where none must break, level
+/// 0 of [`resolve_most_stuck`], taken as it is), the stick most over its static limit slips the way
+/// its force drives it, until the contact law holds: the walk's assignment where
+/// [`only_consistent`] proves it unique.
 #[inline(never)]
 fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
     let (zero, mut mode) = (req.zero & !sys.free, req.mode);
-    let ifaces = || bits(zero & sys.interfaces());
     sys.equal_friction(zero).then_some(())?;
-    ifaces().for_each(|j| mode.contact[j] = Contact::Stuck);
+    bits(zero & sys.interfaces()).for_each(|j| mode.contact[j] = Contact::Stuck);
     for tries in 1..zero.count_ones() + 2 {
         if consistent(sys, &mode, zero, req.load0) {
             let (consistent, ambiguous) = (true, false);
@@ -823,8 +820,7 @@ fn resolve_cascade(sys: &System, req: &ResolveRequest) -> Option<Resolved> {
             let first = tries == 1 && zero & req.must_break == 0;
             return (first || only_consistent(sys, &mode, zero, req.load0, zero)).then_some(res);
         }
-        let (mut j, mut x) = (0, 1.0f64);
-        let mut last = (0, 0.0);
+        let (mut j, mut x, mut last) = (0, 1.0f64, (0, 0.0));
         for i in bits(zero & mode.stuck_mask()) {
             let f = stuck_force_up(sys, &mode, req.load0, i, &mut last);
             let f = f / (sys.mus[i] * sys.normal[i]);
@@ -862,27 +858,23 @@ fn resolve_by_walk(sys: &System, req: &ResolveRequest) -> Resolved {
     }
 }
 
-/// Most switches, decided without the walk: every interface of `zero` stuck
-/// but those of `must_break` (at most two) and `more` others, for each `more`
-/// of `levels` (the levels below failed), in the rule's order: no assignment
-/// without a stick of `must_break` keeps more stuck (rules 1, 2), the extra
-/// slips go through those not stuck before first (rule 3), the highest first
-/// (rule 4's stuck bits), the directions by their bits (rule 4's rest). The
-/// first consistent is the walk's, with its [`ambiguity`]; `None`: none, or
-/// not covered.
+/// Most switches, decided without the walk: every interface of `zero` stuck but those of
+/// `must_break` (at most two) and `more` others, for each `more` of `levels` (the levels below
+/// failed), in the rule's order: no assignment without a stick of `must_break` keeps more stuck
+/// (rules 1, 2), the extra slips go through those not stuck before first (rule 3), the highest
+/// first (rule 4's stuck bits), the directions by their bits (rule 4's rest). The first consistent
+/// is the walk's, with its [`ambiguity`]; `None`: none, or not covered (level 0 with mus = muk and
+/// none breaking, all stuck: the cascade's first try).
 #[inline(always)]
 fn resolve_most_stuck(sys: &System, req: &ResolveRequest, levels: Range<u32>) -> Option<Resolved> {
     let zero = req.zero & !sys.free;
     let breaking = zero & req.must_break;
-    // Level 0 with mus = muk and none breaking (all stuck) is the cascade's first try.
     let cascade = levels.start == 0 && breaking == 0 && sys.equal_friction(zero);
     if breaking.count_ones() > 2 || cascade {
         return None;
     }
     let mut stuck = req.mode;
-    for j in bits(zero & sys.interfaces()) {
-        stuck.contact[j] = Contact::Stuck;
-    }
+    bits(zero & sys.interfaces()).for_each(|j| stuck.contact[j] = Contact::Stuck);
     let others = zero & !breaking;
     // The interfaces of `set` from the top (bits), or a 0 alone if `none`.
     let top = |set: u32| (set != 0).then(|| 1u32 << (31 - set.leading_zeros()));

@@ -299,13 +299,11 @@ impl DynamicsCache {
             hinted if self.keys[hinted - 1] == key => Some(hinted - 1),
             _ => self.keys.iter().position(|&k| k == key),
         };
-        match found {
-            Some(i) => {
-                self.hint[slot] = (i + 1) as u8;
-                *out = self.dynamics[i];
-            }
-            None => self.insert(key, sys, mode, out),
-        }
+        let Some(i) = found else {
+            return self.insert(key, sys, mode, out);
+        };
+        self.hint[slot] = (i + 1) as u8;
+        *out = self.dynamics[i];
     }
 
     /// A mode met for the first time: its dynamics built, kept and copied
