@@ -228,8 +228,9 @@ impl Simulator {
         let mut inp = cur.exc;
         (inp.ag, inp.fext) = cur.exc.at(t0 - cur.t_ref);
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
-        // Substeps to wait after a failed try of an energy run (below).
-        let (mut wait, cool) = (0, 8);
+        // After a substep an energy run could not prove, the general loop's until one is clear
+        // of the running peaks (below).
+        let mut wait = false;
         let mut taken = 0u64;
         let mut pending = None;
         // The pieces the source promised to continue the last: `lean[0]`
@@ -279,9 +280,7 @@ impl Simulator {
             // The structure's cluster alone: the substeps its energy proves at once (`energy_run`)
             // through the pieces the source promised (Fext constant); where it does not, the
             // quick tests (peaks, band).
-            if RUNS > 0 && wait > 0 {
-                wait -= 1;
-            } else if RUNS > 0 && lean[0] < lean[1] && inp.fext_rate == 0.0 {
+            if RUNS > 0 && !wait && lean[0] < lean[1] && inp.fext_rate == 0.0 {
                 let cf = load_accel + rule.accel(inp.ag, inp.fext);
                 let rate_m = rule.accel(inp.ag_rate, inp.fext_rate);
                 let peaks = [peak_u0, peak_a0];
@@ -318,11 +317,11 @@ impl Simulator {
                 if taken > before {
                     a_abs = cf - w2 * u0 - cm * vel[0];
                 }
-                // A substep the run could not prove: the general loop takes it and the next `cool`.
+                // A substep the run could not prove: the general loop takes it.
                 if taken > before && !unproved {
                     continue;
                 }
-                wait = cool;
+                wait = true;
             }
             // Every substep of a piece is `cur.h` long; the last ends at the
             // piece's end, which differs from `t0 + h` only by the rounding
@@ -381,7 +380,13 @@ impl Simulator {
                 }
             }
             // Peaks of |u0| and |A0|; where the bounds cannot exclude a new
-            // one inside, on the polynomials.
+            // one inside, on the polynomials. Clear of them (the quick tests): energy runs again.
+            let sag = 0.125 * hs * hs * s3;
+            if RUNS > 0
+                && peaks_quick(map, [u0, u1, a_abs, a1], sag, [peak_u0, peak_a0]) == [true; 2]
+            {
+                wait = false;
+            }
             let peaks = [&mut peak_u0, &mut peak_a0];
             let [u_proved, a_proved] =
                 structure_peaks_proved(map, [&z, &z_abs], [u1, v1], ends, jerks, hs, s3, peaks);
