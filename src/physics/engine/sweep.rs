@@ -176,8 +176,7 @@ impl Simulator {
         debug_assert_eq!(AG, sys.prescribed());
         let rule = d.input_rule::<AG>();
         let accel_c: [f64; NC] = std::array::from_fn(|c| d.accel_const[c]);
-        // The piece in locals (written back at the end): the loop reads
-        // them every substep.
+        // The piece in locals (written back at the end): the loop reads them every substep.
         let mut cur = piece.read_by_field();
         // Kept rows (a master's calls: a few lengths); a piece of another
         // length met on the way has its own.
@@ -228,8 +227,7 @@ impl Simulator {
         let mut inp = cur.exc;
         (inp.ag, inp.fext) = cur.exc.at(t0 - cur.t_ref);
         let mut a_abs = load_accel + rule.accel(inp.ag, inp.fext) - w2 * u0 - cm * vel[0];
-        // After a substep an energy run could not prove, the general loop's until one is clear
-        // of the running peaks (below).
+        // After an energy run's unproved substep: the general loop's, until one clears the peaks.
         let mut wait = false;
         let mut taken = 0u64;
         let mut pending = None;
@@ -379,8 +377,8 @@ impl Simulator {
                     break;
                 }
             }
-            // Peaks of |u0| and |A0|; where the bounds cannot exclude a new
-            // one inside, on the polynomials. Clear of them (the quick tests): energy runs again.
+            // Peaks of |u0| and |A0|; where the bounds cannot exclude a new one inside, on the
+            // polynomials. Clear of them (the quick tests): energy runs again.
             let sag = 0.125 * hs * hs * s3;
             let [u_clear, a_clear] = peaks_quick(map, [u0, u1, a_abs, a1], sag, [peak_u0, peak_a0]);
             wait &= !(u_clear && a_clear);
