@@ -177,16 +177,15 @@ impl Params {
             check_scalar(name, value)?;
         }
         for j in 0..self.n_blocks {
-            let name = |s: &str| format!("{}[{}]", s, j + 1);
-            check_scalar(&name("alpha"), self.alpha[j])?;
-            check_scalar(&name("mus"), self.mus[j])?;
-            check_scalar(&name("muk"), self.muk[j])?;
-            check(
-                &name("muk"),
-                self.muk[j],
-                self.muk[j] <= self.mus[j],
-                "finite, >= 0 and <= mus of the same interface",
-            )?;
+            let (mus, muk) = (self.mus[j], self.muk[j]);
+            let same = "finite, >= 0 and <= mus of the same interface";
+            // The first error in this order; the interface's number added to its field only then.
+            (check_scalar("alpha", self.alpha[j]).and(check_scalar("mus", mus)))
+                .and(check_scalar("muk", muk).and(check("muk", muk, muk <= mus, same)))
+                .map_err(|e| ParamError {
+                    field: format!("{}[{}]", e.field, j + 1),
+                    ..e
+                })?;
         }
         Ok(())
     }
