@@ -139,6 +139,7 @@ pub const MIN_MAX_STEP: f64 = 1e-7;
 
 /// The range of one scalar field, by its public name (`alpha[2]` is checked
 /// as `alpha`). Cross-field rules (muk <= mus) are in [`Params::validate`].
+#[inline] // (constant names: the lookup folds away)
 pub fn check_scalar(field: &str, value: f64) -> Result<(), ParamError> {
     let base = field.split('[').next().unwrap_or(field);
     if base == "maxStep" {
