@@ -169,14 +169,10 @@ impl Params {
         let allowed = "an integer from 1 to 8 on a prescribed support (a stack of no block has \
                        nothing to compute)";
         check("nBlocks", n as f64, n > 0 || !on_support, allowed)?;
-        for (name, value) in [
-            ("mp", self.mp),
-            ("Tp", self.tp),
-            ("zeta", self.zeta),
-            ("g", self.g),
-        ] {
-            check_scalar(name, value)?;
-        }
+        check_scalar("mp", self.mp)?;
+        check_scalar("Tp", self.tp)?;
+        check_scalar("zeta", self.zeta)?;
+        check_scalar("g", self.g)?;
         for j in 0..self.n_blocks {
             let (mus, muk) = (self.mus[j], self.muk[j]);
             let same = "finite, >= 0 and <= mus of the same interface";
