@@ -1,7 +1,7 @@
 """The default's speed on every real record in ../shared/ground_motions
 (issue #21: the targets on records the engine was not tuned on).
 
-    python scripts/speed_on_records.py --out DIR [--rounds N] [--scenes n0 n2 ...]
+    python scripts/speed_on_records.py --out DIR [--rounds N] [--runs K] [--scenes n0 n2 ...]
                                        [--records NAME ...]
 
 Runs `cargo run --release --example ratio` with RECORDS set to every record
@@ -9,7 +9,9 @@ Runs `cargo run --release --example ratio` with RECORDS set to every record
 blocks, eight blocks with mus = muk and issue #21's eight blocks with
 mus > muk. Each figure is the median of N rounds timed alternately with the
 floor (the exact Nigam-Jennings recurrence of the bare structure over the
-same samples). Writes DIR/speed_on_records.csv and DIR/speed_on_records.png:
+same samples); with --runs K, the median of K such runs, every other one
+taking the records backward (a single run on a shared machine can be off by
+a third, the last record's more often). Writes DIR/speed_on_records.csv and DIR/speed_on_records.png:
 the ratio to the floor against the switches per 1 000 samples (the bare
 structure: against the sample interval).
 """
@@ -19,6 +21,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import statistics
 import subprocess
 import sys
 from pathlib import Path
@@ -43,9 +46,10 @@ def parse(line: str) -> dict:
             "ratio": float(w[9].rstrip("x")), "switches": int(w[10]), "samples": int(w[12])}
 
 
-def measure(rounds: int, scenes: list[str], names: list[str] | None) -> list[dict]:
-    paths = sorted(p for p in RECORDS.iterdir() if p.suffix.lower() == ".at2"
-                   and (not names or p.stem in names))
+def measure(rounds: int, scenes: list[str], names: list[str] | None, backward: bool = False
+            ) -> list[dict]:
+    paths = sorted((p for p in RECORDS.iterdir() if p.suffix.lower() == ".at2"
+                    and (not names or p.stem in names)), reverse=backward)
     env = dict(os.environ, ROUNDS=str(rounds), REPS="10", RECORDS=":".join(map(str, paths)))
     cmd = ["cargo", "run", "--quiet", "--release", "--example", "ratio", "--", *scenes]
     rows = []
@@ -58,6 +62,18 @@ def measure(rounds: int, scenes: list[str], names: list[str] | None) -> list[dic
     if proc.returncode:
         sys.exit(f"{' '.join(cmd)} failed")
     return rows
+
+
+def median_of_runs(runs: list[list[dict]]) -> list[dict]:
+    """Each (record, scene) of the first run with the median ratio and times of all runs."""
+    key = lambda r: (r["record"], r["scene"])  # noqa: E731
+    by_key = [{key(r): r for r in run} for run in runs]
+    out = []
+    for row in runs[0]:
+        same = [run[key(row)] for run in by_key]
+        med = {k: statistics.median(r[k] for r in same) for k in ("engine_us", "floor_us", "ratio")}
+        out.append({**row, **med})
+    return out
 
 
 def plot(rows: list[dict], path: Path) -> None:
@@ -90,12 +106,20 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--rounds", type=int, default=7)
+    ap.add_argument("--runs", type=int, default=1, help="runs of every record (medians)")
     ap.add_argument("--scenes", nargs="+", choices=list(SCENES), default=list(SCENES))
     ap.add_argument("--records", nargs="+", metavar="NAME",
                     help="record file names without extension (default: all)")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    rows = measure(args.rounds, args.scenes, args.records)
+    runs = []
+    for k in range(args.runs):
+        if args.runs > 1:
+            print(f"run {k + 1} of {args.runs}", flush=True)
+        # Every other run takes the records backward: a record's place in the run
+        # (the first or the last) does not weigh on its median.
+        runs.append(measure(args.rounds, args.scenes, args.records, backward=k % 2 == 1))
+    rows = median_of_runs(runs) if runs[0] else []
     if not rows:
         sys.exit("no record measured (check --records against ../shared/ground_motions)")
     with open(args.out / "speed_on_records.csv", "w", newline="") as f:
