@@ -117,7 +117,8 @@ pub(super) fn slip_guard_proved(
 
 /// Raises the structure's peaks of |u0| and |A0| over the substep from `z` (with `|z|`; end values
 /// `u1`, `v1`; the absolute acceleration `a0` and `a1` at the ends, its rates `jerks()`) where that
-/// is proved; returns which were: quick tests first ([`peaks_quick`]), then the cubic bounds.
+/// is proved; returns which were: the quick tests' verdicts `quick` ([`peaks_quick`], taken by
+/// the caller), else the cubic bounds.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn structure_peaks_proved(
@@ -126,12 +127,10 @@ pub(super) fn structure_peaks_proved(
     [u1, v1]: [f64; 2],
     [a0, a1]: [f64; 2],
     jerks: impl FnOnce() -> [f64; 2],
-    h: f64,
-    s3: f64,
+    [h, s3]: [f64; 2],
+    quick: [bool; 2],
     [peak_u0, peak_a0]: [&mut f64; 2],
 ) -> [bool; 2] {
-    let sag = 0.125 * h * h * s3;
-    let quick = peaks_quick(map, [z[0], u1, a0, a1], sag, [*peak_u0, *peak_a0]);
     // Both at once (one branch on the usual path).
     if quick[0] & quick[1] {
         return quick;
@@ -150,10 +149,17 @@ pub(super) fn structure_peaks_proved(
     [u_proved, a_proved]
 }
 
-/// The quick tests of [`structure_peaks_proved`] from `ends = [u0, u1, A0, A1]`: the larger
-/// `|end|` plus `h²/8 sup|y''|` (`sup|u''| <= one_over_three s3`, `sup|A''| = sup|v'''| <= s3`).
+/// The quick tests (`quick` of [`structure_peaks_proved`]) over a substep of `h` from `ends = [u0,
+/// u1, A0, A1]`: the larger `|end|` plus `h²/8 sup|y''|` (`sup|u''| <= one_over_three s3`,
+/// `sup|A''| = sup|v'''| <= s3`).
 #[inline(always)]
-pub(super) fn peaks_quick(map: &ExactMap, ends: [f64; 4], sag: f64, peaks: [f64; 2]) -> [bool; 2] {
+pub(super) fn peaks_quick(
+    map: &ExactMap,
+    ends: [f64; 4],
+    [h, s3]: [f64; 2],
+    peaks: [f64; 2],
+) -> [bool; 2] {
+    let sag = 0.125 * h * h * s3;
     let larger = |a: f64, b: f64| if a.abs() > b.abs() { a.abs() } else { b.abs() };
     let u = larger(ends[0], ends[1]) + sag * map.one_over_three;
     [u <= peaks[0], larger(ends[2], ends[3]) + sag <= peaks[1]]

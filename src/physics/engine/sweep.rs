@@ -297,7 +297,7 @@ impl Simulator {
                     if !energy_run(rates, [u, v], [cf, cost], limits) {
                         let ends = [u, u1, cf - w2 * u - cm * v, cf - w2 * u1 - cm * v1];
                         let s3 = map.sup_v_abs(3, &z.map(f64::abs));
-                        let [u_ok, a_ok] = peaks_quick(map, ends, 0.125 * hs * hs * s3, peaks);
+                        let [u_ok, a_ok] = peaks_quick(map, ends, [hs, s3], peaks);
                         // The band's quick test (NaN rates): the general loop decides the rest.
                         let out = |a| !in_band_proved(a, || [f64::NAN; 2], hs, s3, band);
                         if !(u_ok && a_ok) || has_band && out([ends[2], ends[3]]) {
@@ -379,15 +379,14 @@ impl Simulator {
             }
             // Peaks of |u0| and |A0|; where the bounds cannot exclude a new one inside, on the
             // polynomials. Clear of them (the quick tests): energy runs again.
-            let sag = 0.125 * hs * hs * s3;
-            if RUNS > 0
-                && peaks_quick(map, [u0, u1, a_abs, a1], sag, [peak_u0, peak_a0]) == [true; 2]
-            {
+            let quick = peaks_quick(map, [u0, u1, a_abs, a1], [hs, s3], [peak_u0, peak_a0]);
+            if RUNS > 0 && quick == [true; 2] {
                 wait = false;
             }
             let peaks = [&mut peak_u0, &mut peak_a0];
+            let (hs3, zs) = ([hs, s3], [&z, &z_abs]);
             let [u_proved, a_proved] =
-                structure_peaks_proved(map, [&z, &z_abs], [u1, v1], ends, jerks, hs, s3, peaks);
+                structure_peaks_proved(map, zs, [u1, v1], ends, jerks, hs3, quick, peaks);
             if !(u_proved && a_proved) {
                 let peaks = [
                     (!u_proved).then_some(&mut peak_u0),
