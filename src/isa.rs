@@ -26,19 +26,24 @@ static LIMIT: AtomicU8 = AtomicU8::new(Isa::Avx512 as u8);
 /// [`available`], once detected (`u8::MAX` before).
 static DETECTED: AtomicU8 = AtomicU8::new(u8::MAX);
 
-/// The widest set this processor has.
+impl Isa {
+    /// The set stored as `code` (`isa as u8`) in [`LIMIT`] or [`DETECTED`].
+    #[inline(always)]
+    fn from_code(code: u8) -> Option<Isa> {
+        [Isa::Baseline, Isa::Avx2, Isa::Avx512]
+            .get(usize::from(code))
+            .copied()
+    }
+}
+
+/// The widest set this processor has (std's checks, combined once).
 #[inline]
 pub fn available() -> Isa {
-    match DETECTED.load(Relaxed) {
-        0 => Isa::Baseline,
-        1 => Isa::Avx2,
-        2 => Isa::Avx512,
-        _ => {
-            let isa = detect();
-            DETECTED.store(isa as u8, Relaxed);
-            isa
-        }
-    }
+    Isa::from_code(DETECTED.load(Relaxed)).unwrap_or_else(|| {
+        let isa = detect();
+        DETECTED.store(isa as u8, Relaxed);
+        isa
+    })
 }
 
 #[cold]
@@ -67,10 +72,9 @@ pub fn allow_up_to(limit: Isa) {
 /// The copy that runs: the widest available and allowed.
 #[inline(always)]
 pub fn chosen() -> Isa {
-    match LIMIT.load(Relaxed) {
-        0 => Isa::Baseline,
-        1 => available().min(Isa::Avx2),
-        _ => available(),
+    match Isa::from_code(LIMIT.load(Relaxed)) {
+        Some(Isa::Baseline) => Isa::Baseline,
+        limit => available().min(limit.unwrap_or(Isa::Avx512)),
     }
 }
 

@@ -1094,7 +1094,8 @@ pub fn engine_copy_from_env() -> &'static str {
         _ if narrow => Isa::Baseline,
         Ok("baseline") => Isa::Baseline,
         Ok("avx2") => Isa::Avx2,
-        _ => Isa::Avx512,
+        Ok("avx512") | Err(_) => Isa::Avx512,
+        Ok(other) => panic!("ISA={other}: it must be baseline, avx2 or avx512"),
     };
     isa::allow_up_to(limit);
     match isa::chosen() {
