@@ -103,7 +103,7 @@ pub(super) fn slip_guard_proved(
     [coarse, s3]: [f64; 2],
     bound: impl FnOnce() -> f64,
 ) -> bool {
-    let clear = |bound: f64| g0 > 0.125 * h * h * bound && g1 > 0.125 * h * h * bound;
+    let clear = |bound: f64| slip_guard_clear([g0, g1], h, bound);
     clear(coarse) || {
         let bound = bound();
         clear(bound) || {
@@ -113,6 +113,13 @@ pub(super) fn slip_guard_proved(
                 || stays_positive([g0, d0, g1, d1], h, bound)
         }
     }
+}
+
+/// The quick test of [`slip_guard_proved`]: both ends above the sag `h²/8 bound` (`|g''| <= bound`).
+#[inline(always)]
+pub(super) fn slip_guard_clear([g0, g1]: [f64; 2], h: f64, bound: f64) -> bool {
+    let sag = 0.125 * h * h * bound;
+    g0 > sag && g1 > sag
 }
 
 /// Raises the structure's peaks of |u0| and |A0| over the substep from `z` (with `|z|`; end values
