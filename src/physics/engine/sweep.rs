@@ -161,14 +161,22 @@ impl Simulator {
         // Constants of the mode.
         let has_band = RUNS != 1 && d.stick_band.is_some();
         let band: [f64; 2] = d.stick_band.unwrap_or((-f64::MAX, f64::MAX)).into();
-        let slip_sign: [f64; NC] = std::array::from_fn(|m| d.slip_sign[m]);
-        let iface: [usize; NC] = std::array::from_fn(|m| {
+        // Moving interface m (between clusters m and m + 1), and its slip in `u`.
+        let iface = |m: usize| {
             if NC > 1 {
                 d.moving[m.min(NC.saturating_sub(2))].j
             } else {
                 0
             }
-        });
+        };
+        let slip_in = |u: &[f64; MAX_BODIES], m: usize| {
+            let j = iface(m);
+            if NC > 1 {
+                u[j] - u[j - 1]
+            } else {
+                0.0
+            }
+        };
         let (mass, inv_mass) = (d.mass[0], d.inv_mass0);
         let load_accel = d.load_accel0;
         debug_assert!(
@@ -192,40 +200,32 @@ impl Simulator {
         // For the energy runs (w2 and cm are the mode's, whatever the map).
         let rates = [w2, w2.sqrt(), 1.0 / (w2 + cm * cm).sqrt()];
 
-        // The run's state.
+        // The run's state (the bodies keep the start's until they move at its end).
         let mut u0 = self.u[0];
         let u0_start = u0;
-        let vel_start: [f64; NC] = std::array::from_fn(|c| self.v[d.bottom[c]]);
-        let slip_start: [f64; NC] = std::array::from_fn(|m| {
-            let j = iface[m];
-            if NC > 1 {
-                self.u[j] - self.u[j - 1]
-            } else {
-                0.0
-            }
-        });
+        let vel_start = |c: usize| self.v[d.bottom[c]];
         // Substep by substep: the structure's cluster and cluster 1 (the clusters above follow at
         // the run's end: relative to cluster 1 their motion is quadratic in time).
-        let mut v0 = vel_start[0];
+        let mut v0 = vel_start(0);
         let mut one = Cluster1::default();
         if NC > 1 {
-            (one.vel, one.slip) = (vel_start[1], slip_start[0]);
+            (one.vel, one.slip) = (vel_start(1), slip_in(&self.u, 0));
         }
         // The run's length, and the guards between upper clusters, `g(0) >=
         // 0` and `g > 0` after: the run stops before the first zero (less
         // four roundings of it).
         let mut tau = 0.0;
         let mut tau_lim = f64::INFINITY;
-        for m in (1..NC.saturating_sub(1)).filter(|&m| slip_sign[m] != 0.0) {
-            let sign = slip_sign[m];
-            let g0 = sign * (vel_start[m + 1] - vel_start[m]);
+        for m in (1..NC.saturating_sub(1)).filter(|&m| d.slip_sign[m] != 0.0) {
+            let sign = d.slip_sign[m];
+            let g0 = sign * (vel_start(m + 1) - vel_start(m));
             let rate = sign * (accel_c[m + 1] - accel_c[m]);
             tau_lim = tau_lim.min(linear_guard_lasts(g0, rate) * (1.0 - 4.0 * f64::EPSILON));
         }
         // The structure's slip's peak where its interface is free (no guard:
         // raised substep by substep).
-        let sign0 = slip_sign[0];
-        let mut peak_slip0 = self.peak_slip[iface[0]];
+        let sign0 = d.slip_sign[0];
+        let mut peak_slip0 = self.peak_slip[iface(0)];
         let (mut peak_u0, mut peak_a0) = (self.peak_u0, self.peak_a0);
         let mut sums = WorkSums::default();
         // Work of the substeps already summed and flushed.
@@ -450,6 +450,8 @@ impl Simulator {
             sums.add_work(rows, mass, load_accel, &mut work);
             // The clusters above cluster 1 from it: between two upper clusters the relative
             // acceleration is `A_{m+1} - A_m` (the ground's terms cancel).
+            let vel_start: [f64; NC] = std::array::from_fn(vel_start);
+            let slip_start: [f64; NC] = std::array::from_fn(|m| slip_in(&self.u, m));
             let (mut vel, mut shift, mut slip) = (vel_start, [0.0; NC], slip_start);
             vel[0] = v0;
             if NC > 1 {
@@ -488,11 +490,11 @@ impl Simulator {
             let n = self.sys.n;
             move_bodies(&mut self.u, &mut self.v, d, n, u0, &shift_all, &vel_all);
             for m in 0..NC - 1 {
-                let j = iface[m];
+                let j = iface(m);
                 let (start, end) = (slip_start[m], slip[m]);
                 self.e_friction[j] += friction_work(d.slip_force[j], end - start);
                 let peak = &mut self.peak_slip[j];
-                if slip_sign[m] != 0.0 {
+                if d.slip_sign[m] != 0.0 {
                     // Its guard held: it kept its direction. (Not `f64::max`: no NaN's case.)
                     let hi = if end.abs() > start.abs() { end } else { start }.abs();
                     if hi > *peak {
