@@ -361,3 +361,107 @@ fn the_bare_structures_energy_runs_miss_no_peak_on_coarse_records() {
     }
     println!("worst against the exact reference {worst:.1e}");
 }
+
+#[test]
+fn energy_runs_with_sliding_blocks_miss_no_switch_and_no_peak() {
+    // The sweep's energy runs also take substeps where blocks slide on the structure's cluster
+    // (sweep.rs: cluster 1 carried exactly, its slip guard's quick test; the clusters above in
+    // closed form at the run's end). Random stacks of 2 to 8 blocks (μs = μk and μs > μk, some
+    // blocks free to slide far), real records resampled at 0.01 and 0.02 s and broadband ones at
+    // 0.005 s, a held Fext with rare jumps and ramps (which end a run). Expected: the peaks of
+    // the drift and of every slip and the final displacements of the exact reference (1e-9 of
+    // the peaks, as above), and the same as one `advance` per piece, which takes no
+    // run (1e-10 of the peaks).
+    let mut rng = Rng(0x5eed_0019);
+    let mut records = vec![];
+    for (name, dt) in [
+        ("RSN787_LOMAP_SLC270.AT2", 0.01),
+        ("RSN1106_KOBE_KJM090.AT2", 0.02),
+    ] {
+        records.push(truncate(&decimated(&read_shared(name, 9.81), dt), 10.0));
+    }
+    records.push(broadband_record(&mut rng, 10.0, 0.005));
+    let (mut worst, mut events) = (0.0f64, 0);
+    for (r, gm) in records.iter().enumerate() {
+        for case in 0..4 {
+            let n = 2 + (rng.next_f64() * 7.0) as usize;
+            let mut p = Params {
+                n_blocks: n,
+                tp: rng.uniform(0.2, 1.5),
+                zeta: rng.uniform(0.0, 0.08),
+                ..Params::default()
+            };
+            for j in 0..n {
+                p.alpha[j] = rng.uniform(0.05, 0.4);
+                p.muk[j] = rng.uniform(0.02, 0.2);
+                p.mus[j] = p.muk[j]
+                    * if case % 2 == 0 {
+                        1.0
+                    } else {
+                        rng.uniform(1.0, 1.5)
+                    };
+            }
+            let mut fext = rng.uniform(-0.2, 0.2) * p.mp * 9.81;
+            let mut pieces = vec![];
+            for k in 0..gm.time.len() - 1 {
+                let (t_end, e) = record_piece(gm, k);
+                let x = rng.next_f64();
+                if x < 0.005 {
+                    fext = rng.uniform(-0.2, 0.2) * p.mp * 9.81;
+                }
+                let fext_rate = if (0.005..0.01).contains(&x) {
+                    rng.uniform(-5.0, 5.0) * p.mp
+                } else {
+                    0.0
+                };
+                pieces.push(InputPiece {
+                    t_end,
+                    ag: e.ag,
+                    ag_rate: e.ag_rate,
+                    fext,
+                    fext_rate,
+                });
+                fext += fext_rate * (t_end - gm.time[k]);
+            }
+            let excitation = |q: &InputPiece| Excitation {
+                ag: q.ag,
+                ag_rate: q.ag_rate,
+                fext: q.fext,
+                fext_rate: q.fext_rate,
+            };
+            let mut one_call = Simulator::new(&p, &Settings::default()).unwrap();
+            one_call
+                .advance_pieces(pieces.iter().map(|q| (q.t_end, excitation(q))))
+                .unwrap();
+            let mut each = Simulator::new(&p, &Settings::default()).unwrap();
+            for q in &pieces {
+                each.advance(q.t_end, &excitation(q)).unwrap();
+            }
+            let exact = Exact::new(&p).run_pieces(0.0, &pieces, 16);
+            let (a, b) = (one_call.outputs(), each.outputs());
+            let scale = exact.peak_u0;
+            let mut to_exact = rel(a.peak_up, exact.peak_u0);
+            let mut to_each = rel(a.peak_up, b.peak_up);
+            for j in 0..n {
+                let slip_scale = exact.peak_slip[j].max(scale);
+                to_exact = to_exact.max((a.peak_slip[j] - exact.peak_slip[j]).abs() / slip_scale);
+                to_exact = to_exact.max((a.ub[j] - exact.u[j + 1]).abs() / slip_scale);
+                to_each = to_each.max((a.peak_slip[j] - b.peak_slip[j]).abs() / slip_scale);
+            }
+            to_exact = to_exact.max((a.up - exact.u[0]).abs() / scale);
+            let what = format!("record {r}, case {case}, N = {n}, Tp {:.3} s", p.tp);
+            assert!(
+                to_exact < 1e-9,
+                "{what}: {to_exact:e} from the exact reference"
+            );
+            assert!(
+                to_each < 1e-10,
+                "{what}: {to_each:e} from one call per piece"
+            );
+            worst = worst.max(to_exact);
+            events += a.n_events;
+        }
+    }
+    println!("worst against the exact reference {worst:.1e}, {events} switches");
+    assert!(events > 200, "the stacks must switch ({events})");
+}
