@@ -278,6 +278,73 @@ fn decimated(gm: &GroundMotion, dt: f64) -> GroundMotion {
     GroundMotion::uniform(d0 * k as f64, gm.accel.iter().step_by(k).copied().collect())
 }
 
+/// A record's pieces with a held `Fext` (`scale` times a value in `±fext`) that jumps to a new
+/// value, or ramps at `scale` times up to `±rate`, each with the probability `odds` per sample
+/// (either ends an energy run).
+fn pieces_with_held_fext(
+    rng: &mut Rng,
+    gm: &GroundMotion,
+    [fext, rate, scale]: [f64; 3],
+    odds: f64,
+) -> Vec<InputPiece> {
+    let mut held = rng.uniform(-fext, fext) * scale;
+    let mut pieces = vec![];
+    for k in 0..gm.time.len() - 1 {
+        let (t_end, e) = record_piece(gm, k);
+        let x = rng.next_f64();
+        if x < odds {
+            held = rng.uniform(-fext, fext) * scale;
+        }
+        let fext_rate = if (odds..2.0 * odds).contains(&x) {
+            rng.uniform(-rate, rate) * scale
+        } else {
+            0.0
+        };
+        pieces.push(InputPiece {
+            t_end,
+            ag: e.ag,
+            ag_rate: e.ag_rate,
+            fext: held,
+            fext_rate,
+        });
+        held += fext_rate * (t_end - gm.time[k]);
+    }
+    pieces
+}
+
+/// A run's distance from the exact reference (1e-9 of the peaks) and from one call per piece
+/// (1e-10).
+fn assert_near(what: &str, to_exact: f64, to_each: f64) {
+    assert!(
+        to_exact < 1e-9,
+        "{what}: {to_exact:e} from the exact reference"
+    );
+    assert!(
+        to_each < 1e-10,
+        "{what}: {to_each:e} from one call per piece"
+    );
+}
+
+/// The outputs of `pieces` taken in one `advance_pieces` call (a record's samples: energy runs)
+/// and in one `advance` per piece (no run).
+fn in_one_call_and_each(p: &Params, pieces: &[InputPiece]) -> (Outputs, Outputs) {
+    let excitation = |q: &InputPiece| Excitation {
+        ag: q.ag,
+        ag_rate: q.ag_rate,
+        fext: q.fext,
+        fext_rate: q.fext_rate,
+    };
+    let mut one_call = Simulator::new(p, &Settings::default()).unwrap();
+    one_call
+        .advance_pieces(pieces.iter().map(|q| (q.t_end, excitation(q))))
+        .unwrap();
+    let mut each = Simulator::new(p, &Settings::default()).unwrap();
+    for q in pieces {
+        each.advance(q.t_end, &excitation(q)).unwrap();
+    }
+    (one_call.outputs(), each.outputs())
+}
+
 #[test]
 fn the_bare_structures_energy_runs_miss_no_peak_on_coarse_records() {
     // The sweep's energy runs take a bare structure's substeps where an
@@ -306,56 +373,14 @@ fn the_bare_structures_energy_runs_miss_no_peak_on_coarse_records() {
                 mp: rng.uniform(0.5, 5.0),
                 ..Params::default()
             };
-            let mut fext = rng.uniform(-3.0, 3.0) * p.mp;
-            let mut pieces = vec![];
-            for k in 0..gm.time.len() - 1 {
-                let (t_end, e) = record_piece(&gm, k);
-                let x = rng.next_f64();
-                if x < 0.01 {
-                    fext = rng.uniform(-3.0, 3.0) * p.mp;
-                }
-                let fext_rate = if (0.01..0.02).contains(&x) {
-                    rng.uniform(-20.0, 20.0) * p.mp
-                } else {
-                    0.0
-                };
-                pieces.push(InputPiece {
-                    t_end,
-                    ag: e.ag,
-                    ag_rate: e.ag_rate,
-                    fext,
-                    fext_rate,
-                });
-                fext += fext_rate * (t_end - gm.time[k]);
-            }
-            let excitation = |q: &InputPiece| Excitation {
-                ag: q.ag,
-                ag_rate: q.ag_rate,
-                fext: q.fext,
-                fext_rate: q.fext_rate,
-            };
-            let mut one_call = Simulator::new(&p, &Settings::default()).unwrap();
-            one_call
-                .advance_pieces(pieces.iter().map(|q| (q.t_end, excitation(q))))
-                .unwrap();
-            let mut each = Simulator::new(&p, &Settings::default()).unwrap();
-            for q in &pieces {
-                each.advance(q.t_end, &excitation(q)).unwrap();
-            }
+            let pieces = pieces_with_held_fext(&mut rng, &gm, [3.0, 20.0, p.mp], 0.01);
+            let (a, b) = in_one_call_and_each(&p, &pieces);
             let exact = Exact::new(&p).run_pieces(0.0, &pieces, 16);
-            let (a, b) = (one_call.outputs(), each.outputs());
             let what = format!("{name}, Tp {:.3} s, zeta {zeta}", p.tp);
             let to_exact =
                 rel(a.peak_up, exact.peak_u0).max((a.up - exact.u[0]).abs() / exact.peak_u0);
             let to_each = rel(a.peak_up, b.peak_up).max(rel(a.peak_ap_abs, b.peak_ap_abs));
-            assert!(
-                to_exact < 1e-9,
-                "{what}: {to_exact:e} from the exact reference"
-            );
-            assert!(
-                to_each < 1e-10,
-                "{what}: {to_each:e} from one call per piece"
-            );
+            assert_near(&what, to_exact, to_each);
             worst = worst.max(to_exact);
         }
     }
@@ -366,8 +391,8 @@ fn the_bare_structures_energy_runs_miss_no_peak_on_coarse_records() {
 fn energy_runs_with_sliding_blocks_miss_no_switch_and_no_peak() {
     // The sweep's energy runs also take substeps where blocks slide on the structure's cluster
     // (sweep.rs: cluster 1 carried exactly, its slip guard's quick test; the clusters above in
-    // closed form at the run's end). Random stacks of 2 to 8 blocks (μs = μk and μs > μk, some
-    // blocks free to slide far), real records resampled at 0.01 and 0.02 s and broadband ones at
+    // closed form at the run's end). Random stacks of 2 to 8 blocks (μs = μk on about half of
+    // the interfaces, μs > μk on the others), real records resampled at 0.01 and 0.02 s and broadband ones at
     // 0.005 s, a held Fext with rare jumps and ramps (which end a run). Expected: the peaks of
     // the drift and of every slip and the final displacements of the exact reference (1e-9 of
     // the peaks, as above), and the same as one `advance` per piece, which takes no
@@ -385,60 +410,10 @@ fn energy_runs_with_sliding_blocks_miss_no_switch_and_no_peak() {
     for (r, gm) in records.iter().enumerate() {
         for case in 0..4 {
             let n = 2 + (rng.next_f64() * 7.0) as usize;
-            let mut p = Params {
-                n_blocks: n,
-                tp: rng.uniform(0.2, 1.5),
-                zeta: rng.uniform(0.0, 0.08),
-                ..Params::default()
-            };
-            for j in 0..n {
-                p.alpha[j] = rng.uniform(0.05, 0.4);
-                p.muk[j] = rng.uniform(0.02, 0.2);
-                p.mus[j] = p.muk[j]
-                    * if case % 2 == 0 {
-                        1.0
-                    } else {
-                        rng.uniform(1.0, 1.5)
-                    };
-            }
-            let mut fext = rng.uniform(-0.2, 0.2) * p.mp * 9.81;
-            let mut pieces = vec![];
-            for k in 0..gm.time.len() - 1 {
-                let (t_end, e) = record_piece(gm, k);
-                let x = rng.next_f64();
-                if x < 0.005 {
-                    fext = rng.uniform(-0.2, 0.2) * p.mp * 9.81;
-                }
-                let fext_rate = if (0.005..0.01).contains(&x) {
-                    rng.uniform(-5.0, 5.0) * p.mp
-                } else {
-                    0.0
-                };
-                pieces.push(InputPiece {
-                    t_end,
-                    ag: e.ag,
-                    ag_rate: e.ag_rate,
-                    fext,
-                    fext_rate,
-                });
-                fext += fext_rate * (t_end - gm.time[k]);
-            }
-            let excitation = |q: &InputPiece| Excitation {
-                ag: q.ag,
-                ag_rate: q.ag_rate,
-                fext: q.fext,
-                fext_rate: q.fext_rate,
-            };
-            let mut one_call = Simulator::new(&p, &Settings::default()).unwrap();
-            one_call
-                .advance_pieces(pieces.iter().map(|q| (q.t_end, excitation(q))))
-                .unwrap();
-            let mut each = Simulator::new(&p, &Settings::default()).unwrap();
-            for q in &pieces {
-                each.advance(q.t_end, &excitation(q)).unwrap();
-            }
+            let p = random_stack(&mut rng, n, Support::Structure);
+            let pieces = pieces_with_held_fext(&mut rng, gm, [0.2, 5.0 / 9.81, p.mp * 9.81], 0.005);
+            let (a, b) = in_one_call_and_each(&p, &pieces);
             let exact = Exact::new(&p).run_pieces(0.0, &pieces, 16);
-            let (a, b) = (one_call.outputs(), each.outputs());
             let scale = exact.peak_u0;
             let mut to_exact = rel(a.peak_up, exact.peak_u0);
             let mut to_each = rel(a.peak_up, b.peak_up);
@@ -450,14 +425,7 @@ fn energy_runs_with_sliding_blocks_miss_no_switch_and_no_peak() {
             }
             to_exact = to_exact.max((a.up - exact.u[0]).abs() / scale);
             let what = format!("record {r}, case {case}, N = {n}, Tp {:.3} s", p.tp);
-            assert!(
-                to_exact < 1e-9,
-                "{what}: {to_exact:e} from the exact reference"
-            );
-            assert!(
-                to_each < 1e-10,
-                "{what}: {to_each:e} from one call per piece"
-            );
+            assert_near(&what, to_exact, to_each);
             worst = worst.max(to_exact);
             events += a.n_events;
         }

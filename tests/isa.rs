@@ -4,35 +4,12 @@
 //! (the test says so); the baseline is compared with every one it has.
 mod common;
 
-use common::Rng;
+use common::{random_stack, Rng};
 use stacked_live_load::{
     ground::record,
     isa::{self, Isa},
     Excitation, Outputs, Params, Settings, Simulator, Support,
 };
-
-/// A random stack of `n` blocks, mus >= muk (equal on about half of the
-/// interfaces), on the structure or on a prescribed support.
-fn random_scene(rng: &mut Rng, n: usize, support: Support) -> Params {
-    let mut p = Params {
-        n_blocks: n,
-        tp: rng.uniform(0.2, 1.5),
-        zeta: rng.uniform(0.0, 0.1),
-        support,
-        ..Params::default()
-    };
-    for j in 0..n {
-        p.alpha[j] = rng.uniform(0.05, 0.4);
-        p.muk[j] = rng.uniform(0.02, 0.3);
-        p.mus[j] = p.muk[j]
-            * if rng.next_f64() < 0.5 {
-                1.0
-            } else {
-                rng.uniform(1.0, 1.5)
-            };
-    }
-    p
-}
 
 /// Every output of a scene over a record, the whole record in one call and
 /// one call per sample (the driver's two ways).
@@ -89,10 +66,10 @@ fn the_wider_copies_give_the_baselines_results_bit_for_bit() {
         common::graded_stack_static_above_kinetic(),
     ];
     for n in 0..=8 {
-        scenes.push(random_scene(&mut rng, n, Support::Structure));
+        scenes.push(random_stack(&mut rng, n, Support::Structure));
     }
     for n in [1, 3, 8] {
-        scenes.push(random_scene(&mut rng, n, Support::Prescribed));
+        scenes.push(random_stack(&mut rng, n, Support::Prescribed));
     }
     let records: Vec<_> = [0.005, 0.01, 0.02]
         .iter()

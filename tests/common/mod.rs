@@ -29,7 +29,7 @@ use nalgebra::{DMatrix, DVector};
 use stacked_live_load::fmi::instance::{Instance, LogSink, Status};
 use stacked_live_load::physics::mode::{self, Contact, Mode, ResolveRequest};
 use stacked_live_load::physics::system::System;
-use stacked_live_load::{GroundMotion, Params};
+use stacked_live_load::{GroundMotion, Params, Support};
 use std::f64::consts::PI;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -1149,4 +1149,27 @@ pub fn broadband_record(rng: &mut Rng, duration: f64, dt: f64) -> GroundMotion {
     let peak = raw.iter().fold(0.0f64, |m, a| m.max(a.abs()));
     let pga = rng.uniform(0.3, 0.6) * 9.81;
     GroundMotion::uniform(dt, raw.iter().map(|a| a * pga / peak).collect())
+}
+
+/// A random stack of `n` blocks, mus >= muk (equal on about half of the
+/// interfaces), on the structure or on a prescribed support.
+pub fn random_stack(rng: &mut Rng, n: usize, support: Support) -> Params {
+    let mut p = Params {
+        n_blocks: n,
+        tp: rng.uniform(0.2, 1.5),
+        zeta: rng.uniform(0.0, 0.1),
+        support,
+        ..Params::default()
+    };
+    for j in 0..n {
+        p.alpha[j] = rng.uniform(0.05, 0.4);
+        p.muk[j] = rng.uniform(0.02, 0.3);
+        p.mus[j] = p.muk[j]
+            * if rng.next_f64() < 0.5 {
+                1.0
+            } else {
+                rng.uniform(1.0, 1.5)
+            };
+    }
+    p
 }
