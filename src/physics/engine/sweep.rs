@@ -141,14 +141,15 @@ impl Simulator {
 
     /// [`Simulator::sweep`] in a mode with `NC` clusters (cluster 0 the structure's; moving
     /// interface m between clusters m and m + 1), with the input rule `Dynamics::input_rule::<AG>`
-    /// (`AG`: a prescribed support); `RUNS` 1 or 2: the structure's cluster alone, in energy runs
-    /// (2: in a stick band).
+    /// (`AG`: a prescribed support); `RUNS` 1 or 2: energy runs on a structure (2: its cluster may
+    /// have a stick band; 1: the structure's cluster alone without one).
     ///
     /// The clusters above the structure's have constant absolute
     /// accelerations `A_c` in the mode: a guard between two of them is
     /// linear in time over the run (the ground's terms cancel), so it holds
     /// up to its zero, found once per run. A slip whose guard holds keeps
-    /// its direction: its peak is at an end of the run. (Run as `sweep_clusters`, `crate::isa`.)
+    /// its direction: its peak is at an end of the run. Relative to cluster 1
+    /// their motion is quadratic: only cluster 1 is carried substep by substep. (Run as `sweep_clusters`, `crate::isa`.)
     #[inline(always)]
     pub(crate) fn sweep_run<const NC: usize, const AG: bool, const RUNS: u8>(
         &mut self,
