@@ -360,21 +360,18 @@ fn hermite_peak_of_a_cubic_is_exact() {
 
 // Switch instants in closed form, and the energy balance over a record.
 
+/// One block on the structure, friction `mu`, damping `zeta`.
 fn one_block(zeta: f64, mu: f64) -> Params {
-    let mut p = Params {
+    Params {
         zeta,
-        n_blocks: 1,
-        ..Params::default()
-    };
-    p.mus[0] = mu;
-    p.muk[0] = mu;
-    p
+        ..scene(1, mu)
+    }
 }
 
 /// Time of the first switch under a ground acceleration linear in time
 /// from rest (one call, one piece).
 fn first_switch(p: &Params, exc: &Excitation, t_end: f64) -> f64 {
-    let mut sim = Simulator::new(p, &Settings::default()).unwrap();
+    let mut sim = sim(p);
     sim.watch_switches();
     sim.advance(t_end, exc).unwrap();
     sim.first_switch()
@@ -441,7 +438,7 @@ fn a_slide_stops_at_the_closed_form_instant() {
             hi = mid;
         }
     }
-    let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+    let mut sim = sim(&p);
     sim.set_state(&[0.0, 0.0], &[0.0, v1]);
     sim.watch_switches();
     sim.advance(1.0, &Excitation::default()).unwrap();
@@ -462,7 +459,7 @@ fn the_energy_balance_holds_to_round_off_over_a_record() {
             n_blocks: n,
             ..Params::default()
         };
-        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        let mut sim = sim(&p);
         record::run(&mut sim, &gm, 1.0).unwrap();
         let o = sim.outputs();
         let residual = (o.energy_residual() / o.e_input).abs();

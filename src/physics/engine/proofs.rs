@@ -91,33 +91,38 @@ pub(super) fn in_band_proved(
     }
 }
 
-/// Whether the slip guard between the structure's cluster and the one above
-/// stays positive over a substep of length `h`: its ends `g0`, `g1` (the
-/// signed relative velocity), `|g''| <= bound() <= coarse`, `|g'''| <= s3`,
-/// and (only when those do not decide) `rates()`: `g'` at the ends, `g''(0)`.
+/// The quick test of the slip guard between the structure's cluster and the one above over a
+/// substep of length `h`: its ends `g0`, `g1` (the signed relative velocity) both above `h²/8` of
+/// the coarse bound `|g''| <= sup|v0''| + |ag'| <= two_over_three s3 + |ag'|` (`s3` bounds
+/// `|v0'''|`). Where it fails, [`slip_guard_proved`].
+#[inline(always)]
+pub(super) fn slip_guard_quick(map: &ExactMap, g: [f64; 2], h: f64, s3: f64, ag_rate: f64) -> bool {
+    slip_guard_clear(g, h, map.two_over_three * s3 + ag_rate.abs())
+}
+
+/// Whether that slip guard stays positive where [`slip_guard_quick`] did not decide: its ends
+/// `g0`, `g1`, `|g''| <= bound()`, `|g'''| <= s3`, and (only when those do not decide)
+/// `rates()`: `g'` at the ends, `g''(0)`.
 #[inline(always)]
 pub(super) fn slip_guard_proved(
     [g0, g1]: [f64; 2],
     rates: impl FnOnce() -> [f64; 3],
     h: f64,
-    [coarse, s3]: [f64; 2],
+    s3: f64,
     bound: impl FnOnce() -> f64,
 ) -> bool {
-    let clear = |bound: f64| slip_guard_clear([g0, g1], h, bound);
-    clear(coarse) || {
-        let bound = bound();
-        clear(bound) || {
-            let [d0, d1, c0] = rates();
-            // A slip just begun (g0 near 0, g1 > 0): g >= g0 + τ (d0 + min(0, c0 h/2) - s3 h²/6).
-            (g0 >= 0.0 && g1 > 0.0 && d0 + (0.5 * c0 * h).min(0.0) > s3 * h * h / 6.0)
-                || stays_positive([g0, d0, g1, d1], h, bound)
-        }
+    let bound = bound();
+    slip_guard_clear([g0, g1], h, bound) || {
+        let [d0, d1, c0] = rates();
+        // A slip just begun (g0 near 0, g1 > 0): g >= g0 + τ (d0 + min(0, c0 h/2) - s3 h²/6).
+        (g0 >= 0.0 && g1 > 0.0 && d0 + (0.5 * c0 * h).min(0.0) > s3 * h * h / 6.0)
+            || stays_positive([g0, d0, g1, d1], h, bound)
     }
 }
 
-/// The quick test of [`slip_guard_proved`]: both ends above the sag `h²/8 bound` (`|g''| <= bound`).
+/// Both ends of a guard above the sag `h²/8 bound` (`|g''| <= bound`).
 #[inline(always)]
-pub(super) fn slip_guard_clear([g0, g1]: [f64; 2], h: f64, bound: f64) -> bool {
+fn slip_guard_clear([g0, g1]: [f64; 2], h: f64, bound: f64) -> bool {
     let sag = 0.125 * h * h * bound;
     g0 > sag && g1 > sag
 }

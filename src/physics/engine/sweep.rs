@@ -27,7 +27,7 @@ use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
 use super::proofs::{
     energy_run, in_band_proved, linear_guard_lasts, peaks_quick, raise_peak_proved,
-    slip_guard_clear, slip_guard_proved, structure_peaks_proved,
+    slip_guard_proved, slip_guard_quick, structure_peaks_proved,
 };
 use super::{friction_work, move_bodies, Excitation, Piece, PieceSource, Simulator};
 use crate::physics::hermite;
@@ -327,12 +327,8 @@ impl Simulator {
                     if NC > 1 {
                         let next = o.step(hs, [i.ag, i.ag + i.ag_rate * hs], terms, u1 - u);
                         let s3 = map.sup_v_abs(3, &z.map(f64::abs));
-                        let coarse = map.two_over_three * s3 + i.ag_rate.abs();
-                        if !slip_guard_clear(
-                            [sign0 * (o.vel - v), sign0 * (next.vel - v1)],
-                            hs,
-                            coarse,
-                        ) {
+                        let g = [sign0 * (o.vel - v), sign0 * (next.vel - v1)];
+                        if !slip_guard_quick(map, g, hs, s3, i.ag_rate) {
                             break true;
                         }
                         (o, tq) = (next, tq + hs);
@@ -392,16 +388,13 @@ impl Simulator {
             // Whether the quick tests clear this substep (then energy runs again).
             let mut guard_quick = true;
             if NC > 1 && sign0 != 0.0 {
-                // The structure's slip guard; |g''| <= sup|v0''| + |ag'|, at
-                // most `two_over_three` sup|v0'''| + |ag'|.
-                let (g0, g1) = (sign0 * (one.vel - v0), sign0 * (next1.vel - v1));
+                // The structure's slip guard; |g''| <= sup|v0''| + |ag'|.
+                let g = [sign0 * (one.vel - v0), sign0 * (next1.vel - v1)];
                 let d = |a: f64| sign0 * (accel_c[1] - a);
                 let rates = || [d(a_abs), d(a1), -sign0 * jerks()[0]];
-                let ag_rate = inp.ag_rate.abs();
-                let coarse = [map.two_over_three * s3 + ag_rate, s3];
-                let bound = || map.sup_v_abs(2, &z_abs) + ag_rate;
-                guard_quick = slip_guard_clear([g0, g1], hs, coarse[0]);
-                if !guard_quick && !slip_guard_proved([g0, g1], rates, hs, coarse, bound) {
+                let bound = || map.sup_v_abs(2, &z_abs) + inp.ag_rate.abs();
+                guard_quick = slip_guard_quick(map, g, hs, s3, inp.ag_rate);
+                if !guard_quick && !slip_guard_proved(g, rates, hs, s3, bound) {
                     break;
                 }
             }
