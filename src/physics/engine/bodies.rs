@@ -4,10 +4,21 @@
 
 use super::*;
 
-/// A cluster above the structure's over a step of length `h`: its absolute
-/// acceleration is constant in the mode, so with `ag` linear its velocity
-/// is a quadratic, and Simpson's rule, exact for the work's cubic, its input work. Returns
-/// (displacement increment, end velocity, input work) from velocity `v`.
+const SIXTH: f64 = 1.0 / 6.0;
+
+/// A cluster above the structure's over a step of length `h` from velocity `v`: its absolute
+/// acceleration `accel` is constant in the mode, so with `ag` linear (`ag0`, `ag_rate`) its
+/// velocity is a quadratic. Returns (displacement increment, end velocity).
+#[inline(always)]
+pub(crate) fn upper_cluster_motion(v: f64, accel: f64, ag0: f64, ag_rate: f64, h: f64) -> [f64; 2] {
+    let rel = accel - ag0;
+    let v_end = v + h * rel - 0.5 * h * h * ag_rate;
+    let du = h * (v + h * (0.5 * rel - h * ag_rate * SIXTH));
+    [du, v_end]
+}
+
+/// [`upper_cluster_motion`] and its input work, by Simpson's rule (exact for the work's cubic).
+/// Returns (displacement increment, end velocity, input work).
 #[inline]
 pub(crate) fn upper_cluster_step(
     v: f64,
@@ -17,11 +28,8 @@ pub(crate) fn upper_cluster_step(
     ag_rate: f64,
     h: f64,
 ) -> [f64; 3] {
-    let rel = accel - ag0;
-    let vm = v + 0.5 * h * rel - 0.125 * h * h * ag_rate;
-    let v_end = v + h * rel - 0.5 * h * h * ag_rate;
-    const SIXTH: f64 = 1.0 / 6.0;
-    let du = h * (v + h * (0.5 * rel - h * ag_rate * SIXTH));
+    let [du, v_end] = upper_cluster_motion(v, accel, ag0, ag_rate, h);
+    let vm = v + 0.5 * h * (accel - ag0) - 0.125 * h * h * ag_rate;
     let (agm, ag1) = (ag0 + 0.5 * h * ag_rate, ag0 + h * ag_rate);
     let work = -mass * h * SIXTH * (ag0 * v + 4.0 * agm * vm + ag1 * v_end);
     [du, v_end, work]

@@ -22,6 +22,7 @@
 //! its map's by that rounding (at most 1e-9 relative) is completed to first
 //! order in the difference, which leaves an error of its square.
 
+use super::bodies::upper_cluster_motion;
 use super::exact_events::raise_substep_peaks;
 use super::exact_map::{canonical_length, dot, ExactMap};
 use super::pieces::is_jump;
@@ -193,10 +194,7 @@ impl Simulator {
         let (mut map, mut rows) = maps.rows(sys, mass, cur.h);
         let mut own_rows: Rows;
         let (mut row_u, mut row_v) = (rows.u, rows.v);
-        // Cluster 1's terms in `A_1` over a substep of `h`.
         let accel1 = if NC > 1 { accel_c[1] } else { 0.0 };
-        let terms_of = |h: f64| [0.5 * h * h * accel1, h * accel1];
-        let mut terms = terms_of(cur.h);
         let (mut w2, mut cm) = (map.w2, map.cm);
         // For the energy runs (w2 and cm are the mode's, whatever the map).
         let rates = [w2, w2.sqrt(), 1.0 / (w2 + cm * cm).sqrt()];
@@ -277,7 +275,6 @@ impl Simulator {
                         own_rows = Rows::new(map, cur.h);
                         rows = &own_rows;
                         (row_u, row_v) = (rows.u, rows.v);
-                        terms = terms_of(cur.h);
                     }
                     lean[1] = pieces.promised();
                     // A0 carries over: it is continuous (a jump of Fext ends the run).
@@ -325,7 +322,7 @@ impl Simulator {
                         }
                     }
                     if NC > 1 {
-                        let next = o.step(hs, [i.ag, i.ag + i.ag_rate * hs], terms, u1 - u);
+                        let next = o.step(hs, accel1, [i.ag, i.ag_rate], u1 - u);
                         let s3 = map.sup_v_abs(3, &z.map(f64::abs));
                         let g = [sign0 * (o.vel - v), sign0 * (next.vel - v1)];
                         if !slip_guard_quick(map, g, hs, s3, i.ag_rate) {
@@ -384,7 +381,7 @@ impl Simulator {
             if has_band && !in_band_proved(ends, jerks, hs, s3, band) {
                 break;
             }
-            let next1 = one.step(hs, [inp.ag, ag1], terms, u1 - u0);
+            let next1 = one.step(hs, accel1, [inp.ag, inp.ag_rate], u1 - u0);
             // Whether the quick tests clear this substep (then energy runs again).
             let mut guard_quick = true;
             if NC > 1 && sign0 != 0.0 {
@@ -522,13 +519,12 @@ struct Cluster1 {
 }
 
 impl Cluster1 {
-    /// After a substep of `h` (`[h²/2, h] A_1`) on which `ag` goes linearly from `ag0` to `ag1`
-    /// and the structure moves by `du0`: exact, the ground's terms being `∫ag` and `∫∫ag`.
+    /// After a substep of `h` with its absolute acceleration `accel`, `ag` linear from `ag0` at
+    /// `ag_rate`, the structure moving by `du0` ([`upper_cluster_motion`]).
     #[inline(always)]
-    fn step(self, h: f64, [ag0, ag1]: [f64; 2], [h2a, ha]: [f64; 2], du0: f64) -> Cluster1 {
-        let du = h * self.vel + h2a - h * h * (ag0 * (1.0 / 3.0) + ag1 * (1.0 / 6.0));
+    fn step(self, h: f64, accel: f64, [ag0, ag_rate]: [f64; 2], du0: f64) -> Cluster1 {
+        let [du, vel] = upper_cluster_motion(self.vel, accel, ag0, ag_rate, h);
         let (shift, slip) = (self.shift + du, self.slip + (du - du0));
-        let vel = self.vel + ha - 0.5 * h * (ag0 + ag1);
         Cluster1 { vel, shift, slip }
     }
 }
