@@ -168,6 +168,33 @@ impl Solver {
         }
     }
 
+    /// Holds `fext` from now on in place of the force the last step ended
+    /// with, which differs from it by rounding only (no jump: nothing
+    /// switches): a step of length 0 under it.
+    pub fn hold_fext(&mut self, fext: f64) -> Result<(), SimError> {
+        let now = self.time();
+        match self {
+            Solver::Exact(s) => {
+                let ag = s.ag_now();
+                s.advance(
+                    now,
+                    &Excitation {
+                        ag,
+                        fext,
+                        ..Default::default()
+                    },
+                )
+            }
+            Solver::Regularized(s) => s.advance(
+                now,
+                &Excitation {
+                    fext,
+                    ..Default::default()
+                },
+            ),
+        }
+    }
+
     /// Starts watching for the first stick/slip switch after the current time.
     pub fn watch_switches(&mut self) {
         if let Solver::Exact(s) = self {

@@ -329,3 +329,51 @@ fn input_slopes_keep_the_inputs_within_their_ranges() {
         assert_eq!(set(&mut inst, input, 0.0), Status::Ok);
     }
 }
+
+#[test]
+fn a_ramp_to_the_end_of_a_range_later_on_leaves_a_state_that_is_accepted() {
+    // Found by a fuzzing master (session 20): away from t = 0 the step's
+    // length in the FMU's clock, (t + h) - t, differs from h by rounding, and
+    // a ramp checked as x + x' h within its range ended an ulp past it:
+    // fmi2DoStep said OK, then fmi2GetReal gave a value fmi2SetReal refused
+    // and the FMU refused its own saved state. Expected: the input ends
+    // within its range (here exactly at its end, as the master computed),
+    // can be set again, and the saved state is accepted.
+    for (input, t0, slope, h, limit) in [
+        (Id::Ag, 1.7, 20810895.459684774, 0.048051752599363985, 1e6),
+        (Id::Ag, 3.3, 949913074.2068369, 0.0010527279044295552, 1e6),
+        (
+            Id::Fext,
+            0.1,
+            -1.1945912595734372e19,
+            0.08371064093982057,
+            1e18,
+        ),
+        (
+            Id::Fext,
+            3.3,
+            -1.1945912595734372e19,
+            0.08371064093982057,
+            1e18,
+        ),
+    ] {
+        let name = input.name();
+        let (mut inst, log) = started(0.0, |_| {});
+        assert_eq!(inst.do_step(0.0, t0), Status::Ok);
+        let now = inst.last_successful_time();
+        // The case's premise: over the clock's length the ramp leaves the range.
+        assert!((slope * ((now + h) - now)).abs() > limit, "{name} at {t0}");
+        assert!((slope * h).abs() <= limit);
+        assert_eq!(set(&mut inst, input, 0.0), Status::Ok);
+        let ders = inst.set_input_derivatives(&[input.vr()], &[1], &[slope]);
+        assert_eq!(ders, Status::Ok);
+        assert_eq!(inst.do_step(now, h), Status::Ok, "{}", log.last());
+        let x = get(&mut inst, input);
+        assert_eq!(x, slope * h, "{name} at {t0}");
+        assert_eq!(set(&mut inst, input, x), Status::Ok, "{}", log.last());
+        let blob = Instance::serialize(&inst.save().unwrap());
+        let state = Instance::deserialize(&blob);
+        assert!(state.is_ok(), "{name} at {t0}: {:?}", state.err());
+        assert_eq!(inst.restore(&state.unwrap()), Status::Ok, "{}", log.last());
+    }
+}

@@ -307,24 +307,35 @@ impl Instance {
             );
         }
         let first_switch = sim.first_switch();
-        // Fext exactly as the engine ended the step (the next step sees no
-        // jump), which differs from `fext_end` by rounding only.
-        let fext_engine = sim.fext_now();
+        // The inputs stand where their slopes took them: the outputs at the
+        // step's end see them there, and an input left alone is held at that
+        // value: `ag` as the engine took its input part to the step's end (a
+        // support's outputs see it), `Fext` as the engine ended the step (the
+        // next step sees no jump). Both differ from the values checked above
+        // by rounding only, which can take a ramp to a range's end an ulp past
+        // it: the checked value then, which the engine is given to hold (its
+        // saved state is checked as an input).
+        let held = |name, engine: f64, checked| match check_scalar(name, engine) {
+            Ok(()) => engine,
+            Err(_) => checked,
+        };
+        let ag_held = held(
+            "ag",
+            self.d.ag + self.d.der_ag * (sim_end - sim_time),
+            ag_end,
+        );
+        let fext_held = held("Fext", sim.fext_now(), fext_end);
+        let result = result.and_then(|()| {
+            if fext_held == sim.fext_now() {
+                return Ok(());
+            }
+            sim.hold_fext(fext_held)
+        });
         // Never fmi2OK with a NaN or an infinity in an output.
         let bad = limits::non_finite_message(&sim.outputs(), start);
         match (result, bad) {
             (Ok(()), None) => {
-                // The inputs stand where their slopes took them: the outputs
-                // at the step's end see them there, and an input left alone
-                // is held at that value: `ag` as the engine took its input
-                // part to the step's end (a support's outputs see it), `Fext`
-                // as the engine ended the step.
-                self.d.ag += self.d.der_ag * (sim_end - sim_time);
-                self.d.fext = if check_scalar("Fext", fext_engine).is_ok() {
-                    fext_engine
-                } else {
-                    fext_end
-                };
+                (self.d.ag, self.d.fext) = (ag_held, fext_held);
                 self.d.der_ag = 0.0;
                 self.d.der_fext = 0.0;
                 self.d.time = end;

@@ -198,7 +198,8 @@ impl Simulator {
                 d.force(j, &self.mode, load0)
             };
             o.stuck[b] = self.mode.is_stuck(j);
-            o.peak_slip[b] = self.peak_slip[j];
+            // Never below the slip shown (taken from other sums: they differ by rounding).
+            o.peak_slip[b] = self.peak_slip[j].max(o.slip[b].abs());
             o.e_friction_of[b] = self.e_friction[j];
         }
         o.e_friction = o.e_friction_of.iter().sum();
