@@ -202,8 +202,12 @@ impl Simulator {
         if slip_zeroed != 0 {
             self.join_velocities(slip_zeroed);
         }
+        // A slip begun at this instant (no relative velocity yet) and not fired broke here: a
+        // second resolution at the same instant (a contact that fires at once) keeps it broken
+        // unless nothing else is consistent (rule 1), rather than preferring it stuck.
         if slip_zeroed | must_break != 0 {
-            self.resolve_mode(must_break);
+            let begun = self.zero_mask() & !self.mode.stuck_mask() & !slip_zeroed;
+            self.resolve_mode(must_break | begun);
         }
     }
 
