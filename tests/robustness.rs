@@ -212,3 +212,88 @@ fn a_saved_state_continues_bit_for_bit() {
     assert_eq!(sim.outputs(), copy.outputs());
     assert!(Simulator::read_state(&mut ByteReader::new(&w.buf[..40])).is_err());
 }
+
+#[test]
+fn a_contact_far_from_its_zero_under_a_strong_ramp_is_not_taken_as_at_zero() {
+    // Found by a fuzzing master (session 20): a 1.3 g structure whose blocks
+    // slide backward at 23.6 m/s relative to it, then Fext ramped at
+    // -1e21 N/s. The slip's guard moves by 1e15 m/s over the step, and a
+    // start within 1e-12 of that counted as zero: it fired at once, joined
+    // the blocks to the structure 23.6 m/s apart, fired again, and the rest
+    // of the step went on with the contact muted: the blocks were dragged to
+    // -5.8e14 m/s and the FMU refused its own saved state. Expected: the
+    // slip reaches zero where it does (8e-12 s in), nothing is muted, and the
+    // blocks then slide under friction and the held ground acceleration:
+    // their velocity changes by (A - ag) h, A = -muk g (to 1e-5: the
+    // switch's instant at this force moves the velocities by rounding-level
+    // times 1e12 m/s^2).
+    let mut p = Params {
+        n_blocks: 3,
+        tp: 116.50437994656964,
+        zeta: 0.08894477069399566,
+        mp: 0.0012746866770295758,
+        ..Params::default()
+    };
+    p.alpha[..3].copy_from_slice(&[
+        0.16029999899101469,
+        0.01038666984503337,
+        0.039963107937020896,
+    ]);
+    p.mus[..3].copy_from_slice(&[0.3621553374476153, 0.36396444942345535, 0.1185384768413591]);
+    p.muk[..3].copy_from_slice(&[0.3621553374476153, 0.36396444942345535, 0.0843472378756638]);
+    // (input, start value, slope, step): the master's steps.
+    let steps: [(u8, f64, f64, f64); 7] = [
+        (0, -711085.1476196632, 1e9, 0.0005302697616482877),
+        (0, -0.16624188776135024, -1e9, 2.3866567519742163e-05),
+        (0, 137740.34281943296, 1e9, 3.682221437334195e-05),
+        (
+            0,
+            976363.6712665362,
+            743284.6112290556,
+            0.031799835993348506,
+        ),
+        (0, 94787.36664059386, 18837722.16153789, 0.04805318953093136),
+        (0, -0.0, -1e9, 0.0005824624203644975),
+        (1, -0.0, -1e21, 4.623625344434941e-05),
+    ];
+    let mut s = Simulator::new(&p, &Settings::default()).unwrap();
+    let (mut ag, mut fext, mut before) = (0.0, 0.0, 0.0);
+    for (input, x0, slope, h) in steps {
+        let exc = if input == 0 {
+            ag = x0;
+            Excitation {
+                ag,
+                ag_rate: slope,
+                fext,
+                fext_rate: 0.0,
+            }
+        } else {
+            fext = x0;
+            Excitation {
+                ag,
+                ag_rate: 0.0,
+                fext,
+                fext_rate: slope,
+            }
+        };
+        before = s.outputs().vb[0];
+        s.advance(s.time() + h, &exc).unwrap();
+        if input == 0 {
+            ag = x0 + slope * h;
+        }
+    }
+    let o = s.outputs();
+    assert_eq!(s.stats().muted, 0);
+    assert!(s.mode_is_consistent());
+    let h = steps[6].3;
+    let expected = before + (-p.muk[0] * p.g - ag) * h;
+    assert!(o.vp < -1e14, "the structure is driven hard: {}", o.vp);
+    assert!(
+        (o.vb[0] - expected).abs() < 1e-5 * expected.abs(),
+        "block 1 at {} m/s, expected {expected}",
+        o.vb[0]
+    );
+    let mut w = ByteWriter::default();
+    s.write_state(&mut w);
+    assert!(Simulator::read_state(&mut ByteReader::new(&w.buf)).is_ok());
+}

@@ -272,10 +272,13 @@ impl Flow {
     }
 
     /// The guard `g`, not proved by [`Flow::holds`], as polynomials (a
-    /// stick band has two sides) written to `out` with their spreads,
-    /// without a side proved positive over the stretch by its exact spread;
-    /// returns how many (written in place: no array of options moved per
-    /// guard).
+    /// stick band has two sides) written to `out`, without a side proved
+    /// positive over the stretch by its exact spread; returns how many
+    /// (written in place: no array of options moved per guard). With each,
+    /// the scale of its start's rounding: its spread, or the size of the
+    /// values it compares where smaller (a guard far from zero against
+    /// those must not pass for zero because a strong load moves it far over
+    /// the stretch).
     fn guard_polys(&mut self, sim: &Simulator, g: &Guard, out: &mut [(Poly, f64); 2]) -> usize {
         match *g {
             Guard::Slip { hi, lo, sign } => {
@@ -291,7 +294,7 @@ impl Flow {
                     ]
                 };
                 let vh = upper(hi);
-                let (p, spread) = &mut out[0];
+                let (p, scale) = &mut out[0];
                 if lo == 0 {
                     for (ck, vk) in p.c.iter_mut().zip(self.v.coefs()) {
                         *ck = sign * (0.0 - vk);
@@ -308,9 +311,14 @@ impl Flow {
                     p.deg = 2;
                 }
                 // Its terms past the second are `v`'s, or none.
-                let tail = if lo == 0 { self.v_tail } else { 0.0 };
-                *spread = p.c[1].abs() + p.c[2].abs() + tail;
-                usize::from(p.c[0] <= *spread)
+                let (tail, v_lo) = if lo == 0 {
+                    (self.v_tail, self.v.c[0])
+                } else {
+                    (0.0, sim.v[d.bottom[lo]])
+                };
+                let spread = p.c[1].abs() + p.c[2].abs() + tail;
+                *scale = spread.min(vh[0].abs() + v_lo.abs());
+                usize::from(p.c[0] <= spread)
             }
             Guard::Stuck {
                 mass_above,
@@ -325,12 +333,12 @@ impl Flow {
                 // coefficients past the first).
                 if a0 - spread <= lo {
                     out[n].0.set_affine(accel, 1.0, -lo);
-                    out[n].1 = spread;
+                    out[n].1 = spread.min(a0.abs() + lo.abs());
                     n += 1;
                 }
                 if a0 + spread >= hi {
                     out[n].0.set_affine(accel, -1.0, hi);
-                    out[n].1 = spread;
+                    out[n].1 = spread.min(a0.abs() + hi.abs());
                     n += 1;
                 }
                 n
@@ -506,8 +514,9 @@ impl Simulator {
             searched |= 1 << j;
             let n_polys = flow.guard_polys(self, g, polys);
             for (poly, scale) in &mut polys[..n_polys] {
-                // A guard at zero (a contact that has just switched) must
-                // grow from it, or it fires at once.
+                // A guard at zero (a contact that has just switched: up to
+                // the rounding of its start) must grow from it, or it fires
+                // at once.
                 if !(poly.c[0] > 1e-12 * *scale || poly.divide_zero_start()) {
                     at_once |= 1 << j;
                     continue;
