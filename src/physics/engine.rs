@@ -139,7 +139,8 @@ impl Simulator {
             Method::StepEnd => crate::baselines::auto_step(settings.max_step, sim.sys.omega_p),
         };
         sim.take_reference();
-        sim.resolve_mode(0);
+        // (A state from outside: no slip at zero broke at this instant.)
+        sim.resolve_mode(0, !0);
         sim.take_reference();
         sim.stats.events = 0;
         sim.last_event = f64::NAN;
@@ -188,7 +189,8 @@ impl Simulator {
         // reference from then on).
         self.rebuild_dynamics();
         self.take_reference();
-        self.resolve_mode(0);
+        // (As in `new`: no slip at zero broke at this instant.)
+        self.resolve_mode(0, !0);
         self.take_reference();
         self.peak_u0 = self.u[0].abs();
         self.peak_slip = [0.0; MAX_BODIES];

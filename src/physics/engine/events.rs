@@ -16,13 +16,18 @@ impl Simulator {
         z & !self.sys.free
     }
 
-    /// Re-resolves the mode at the current state; counts a switch if it changed.
-    pub(super) fn resolve_mode(&mut self, must_break: u32) {
+    /// Re-resolves the mode at the current state; counts a switch if it changed. `must_break`:
+    /// sticks whose force reached its limit; `settled`: slips whose relative velocity reached
+    /// zero. Any other slip at zero began at this instant and broke here: a second resolution at
+    /// the same instant (a contact that fires at once) keeps it broken unless nothing else is
+    /// consistent (rule 1), rather than preferring it stuck.
+    pub(super) fn resolve_mode(&mut self, must_break: u32, settled: u32) {
+        let (zero, was_stuck) = (self.zero_mask(), self.mode.stuck_mask());
         let req = ResolveRequest {
             mode: self.mode,
-            zero: self.zero_mask(),
-            must_break,
-            was_stuck: self.mode.stuck_mask(),
+            zero,
+            must_break: must_break | (zero & !was_stuck & !settled),
+            was_stuck,
             load0: self.load0(),
         };
         let res = mode::resolve(&self.sys, &req);
@@ -202,12 +207,8 @@ impl Simulator {
         if slip_zeroed != 0 {
             self.join_velocities(slip_zeroed);
         }
-        // A slip begun at this instant (no relative velocity yet) and not fired broke here: a
-        // second resolution at the same instant (a contact that fires at once) keeps it broken
-        // unless nothing else is consistent (rule 1), rather than preferring it stuck.
         if slip_zeroed | must_break != 0 {
-            let begun = self.zero_mask() & !self.mode.stuck_mask() & !slip_zeroed;
-            self.resolve_mode(must_break | begun);
+            self.resolve_mode(must_break, slip_zeroed);
         }
     }
 
