@@ -377,3 +377,41 @@ fn a_ramp_to_the_end_of_a_range_later_on_leaves_a_state_that_is_accepted() {
         assert_eq!(inst.restore(&state.unwrap()), Status::Ok, "{}", log.last());
     }
 }
+
+#[test]
+fn running_peaks_never_fall_after_a_step_of_zero_length() {
+    // Found by a fuzzing master (session 20): fmi2DoStep(t, 0) after a jump
+    // of Fext showed the jumped absolute acceleration in peakApAbs, and the
+    // peak fell back when the master set Fext again at the same instant: a
+    // step of length 0 took no substep, and the engine's running peak never
+    // saw the value the step committed. Expected: the peak after the
+    // committed step stays, whatever the inputs set next; the step after it
+    // goes on from there (a tentative input, never stepped with, leaves no
+    // mark: the outputs follow the inputs set).
+    let (mut inst, log) = started(0.0, |inst| {
+        set(inst, Id::Ag, 1.0);
+    });
+    assert_eq!(inst.do_step(0.0, 0.1), Status::Ok);
+    let before = get(&mut inst, Id::PeakApAbs);
+    set(&mut inst, Id::Fext, 4.0e5);
+    assert!(
+        get(&mut inst, Id::PeakApAbs) > 2.0 * before,
+        "the jump shows"
+    );
+    set(&mut inst, Id::Fext, 0.0);
+    assert_eq!(
+        get(&mut inst, Id::PeakApAbs),
+        before,
+        "a tentative input leaves no mark"
+    );
+    set(&mut inst, Id::Fext, 4.0e5);
+    assert_eq!(inst.do_step(0.1, 0.0), Status::Ok, "{}", log.last());
+    let committed = get(&mut inst, Id::PeakApAbs);
+    assert!(committed > 2.0 * before);
+    set(&mut inst, Id::Fext, 0.0);
+    assert_eq!(get(&mut inst, Id::PeakApAbs), committed);
+    assert_eq!(inst.do_step(0.1, 0.0), Status::Ok);
+    assert_eq!(get(&mut inst, Id::PeakApAbs), committed);
+    assert_eq!(inst.do_step(0.1, 0.05), Status::Ok);
+    assert!(get(&mut inst, Id::PeakApAbs) >= committed);
+}

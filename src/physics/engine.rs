@@ -465,6 +465,9 @@ impl Simulator {
     fn fire_at_jump(&mut self, exc: &Excitation) {
         let candidates = self.violated_at_jump(exc);
         self.fire_violated(exc, self.t, candidates, 0);
+        // The absolute acceleration jumps with the inputs: its running peak
+        // takes the new value now (a call of length 0 takes no substep).
+        self.peak_a0 = self.peak_a0.max(self.dynamics.accel(0, self.load0()).abs());
     }
 
     /// For the step-end baseline (`crate::baselines::step_end`) at a
