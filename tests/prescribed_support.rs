@@ -1516,3 +1516,46 @@ fn a_slip_on_a_drifting_support_that_grazes_zero_is_found_in_one_call() {
         assert_eq!(sim.stats().events as usize, exact.events, "{label}");
     }
 }
+
+#[test]
+fn a_mobility_that_goes_back_to_zero_leaves_saved_states_that_are_accepted() {
+    // Found by a fuzzing master (session 20): after calls with a mobility
+    // (the support drifts after a switch) and one without, the saved state
+    // was refused ("moves a prescribed support relative to itself"): the
+    // drift's running peak stays, though the call took the drift out.
+    // Expected: after every call the saved state is accepted and a copy
+    // restored from it continues bit for bit, whatever the mobility per call.
+    let mut rng = Rng(0x0b_11_0000);
+    let mut with_peak = 0;
+    for case in 0..12 {
+        let n = 1 + case % 4;
+        let p = random_scene(&mut rng, n);
+        let pieces = random_inputs(&mut rng, 1.0);
+        let mut sim = Simulator::new(&p, &Settings::default()).unwrap();
+        for (i, piece) in pieces.iter().enumerate() {
+            let mobility = if rng.next_f64() < 0.5 {
+                0.0
+            } else {
+                rng.uniform(0.1, 3.0) / p.mp
+            };
+            sim.set_support_mobility(mobility).unwrap();
+            sim.advance(piece.t_end, &excitation(piece)).unwrap();
+            let mut w = ByteWriter::default();
+            sim.write_state(&mut w);
+            let label = format!("case {case}, call {i}, mobility {mobility:.2e}");
+            let mut back = Simulator::read_state(&mut ByteReader::new(&w.buf))
+                .unwrap_or_else(|e| panic!("{label}: own saved state refused: {e}"));
+            let o = sim.outputs();
+            with_peak += usize::from(mobility == 0.0 && o.peak_up > 0.0);
+            if let Some(next) = pieces.get(i + 1) {
+                let mut ahead = sim.clone();
+                ahead.advance(next.t_end, &excitation(next)).unwrap();
+                back.advance(next.t_end, &excitation(next)).unwrap();
+                assert_eq!(back.outputs(), ahead.outputs(), "{label}");
+            }
+        }
+    }
+    // The case of the defect: calls without mobility after a drift.
+    println!("{with_peak} calls without mobility after a drift");
+    assert!(with_peak > 20, "{with_peak}");
+}

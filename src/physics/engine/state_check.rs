@@ -68,8 +68,9 @@ impl Simulator {
             return Err("the saved state has motion beyond its stack".into());
         }
         // A prescribed support drifts from the input frame only by its
-        // mobility (mode::support_law).
-        let support_moves = self.u[0] != 0.0 || self.v[0] != 0.0 || self.peak_u0 != 0.0;
+        // mobility (mode::support_law); the drift's peak is history: it stays
+        // where a mobility has gone back to 0 (every call takes the drift out).
+        let support_moves = self.u[0] != 0.0 || self.v[0] != 0.0;
         let drift = support_moves && self.sys.mobility == 0.0;
         if self.sys.prescribed() && (drift || self.e_viscous != 0.0) {
             return Err("the saved state moves a prescribed support relative to itself".into());
