@@ -474,9 +474,11 @@ fn parse_csv(
         }
         let fields: Vec<&str> = line.splitn(3, ',').map(str::trim).collect();
         let parsed: Option<Vec<f64>> = fields.iter().map(|f| f.parse().ok()).collect();
+        // A header line has no number in it: a row with a typo in one field is no header.
+        let header = || fields.len() == 2 && fields.iter().all(|f| f.parse::<f64>().is_err());
         let row = match parsed {
             Some(r) if r.len() == 2 => r,
-            None if time.is_empty() && fields.len() == 2 => continue, // header line
+            None if time.is_empty() && header() => continue,
             _ => {
                 return Err(err(
                     file,
@@ -568,5 +570,13 @@ mod tests {
         let e = csv("0,1\n0.5\n", "y.csv").unwrap_err();
         assert_eq!((e.line, e.file.as_str()), (2, "y.csv"));
         assert_eq!(csv("0,1\n0,2\n", "z").unwrap_err().line, 2);
+        // Headers have no number; a first row with a typo (the letter O for a
+        // zero) is an error, not a header (a fuzzing master found it dropped).
+        assert!(csv("time,accel\ns,m/s2\n0,1\n0.5,2\n", "u").is_ok());
+        for bad in ["0,5O\n0.01,5\n0.02,-3\n", "a,b\nc,d\n0.0,X\n0.5,1\n0.7,2\n"] {
+            let e = csv(bad, "v").unwrap_err();
+            assert!(e.message.contains("expected two numbers"), "{bad:?}: {e:?}");
+            assert_eq!(e.line, bad.lines().position(|l| l.contains('0')).unwrap() + 1);
+        }
     }
 }
