@@ -287,7 +287,9 @@ extern "C" {
  *
  * Returns 0 (fmi2OK), or 3 (fmi2Error) with a message naming the set and
  * the variable and its allowed range, or the record's file, line and
- * problem; the results of the sets before a bad one are written. One call
+ * problem. Every set is checked before any runs: a bad one writes no
+ * result; where a run fails (the work bound spent), the results of the
+ * sets before it are written. The path is UTF-8, as an FMU's strings. One call
  * does at most the work of one `fmi2DoStep` (`limits::MAX_STEPS_PER_CALL`):
  * refused up front from the sets' internal steps and the record's samples,
  * stopped when switches spend the rest. A panic never crosses this

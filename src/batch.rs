@@ -73,7 +73,9 @@ const _: () = assert!(MAX_BLOCKS == 8 && BATCH_PARAMS == 28 && BATCH_OUTPUTS == 
 ///
 /// Returns 0 (fmi2OK), or 3 (fmi2Error) with a message naming the set and
 /// the variable and its allowed range, or the record's file, line and
-/// problem; the results of the sets before a bad one are written. One call
+/// problem. Every set is checked before any runs: a bad one writes no
+/// result; where a run fails (the work bound spent), the results of the
+/// sets before it are written. The path is UTF-8, as an FMU's strings. One call
 /// does at most the work of one `fmi2DoStep` (`limits::MAX_STEPS_PER_CALL`):
 /// refused up front from the sets' internal steps and the record's samples,
 /// stopped when switches spend the rest. A panic never crosses this
@@ -99,8 +101,10 @@ pub unsafe extern "C" fn sllRunBatch(
         // The FMU's ranges (params::RANGES), with their messages.
         check_scalar("g", g).map_err(|e| e.to_string())?;
         check_scalar("recordScale", recordScale).map_err(|e| e.to_string())?;
-        let path = CStr::from_ptr(recordFile).to_string_lossy().into_owned();
-        let gm = GroundMotion::read(std::path::Path::new(&path), g)
+        let path = CStr::from_ptr(recordFile)
+            .to_str()
+            .map_err(|_| "recordFile is not UTF-8 text".to_string())?;
+        let gm = GroundMotion::read(std::path::Path::new(path), g)
             .map_err(|e| format!("recordFile: {e}"))?;
         let n = nSets as usize;
         let params = std::slice::from_raw_parts(params, n);
@@ -141,7 +145,11 @@ pub unsafe extern "C" fn sllRunBatch(
     };
     if !message.is_null() && messageSize > 0 {
         let text = format!("sllRunBatch: {error}");
-        let len = text.len().min(messageSize - 1);
+        // Cut at a character's boundary: the buffer holds UTF-8 text.
+        let mut len = text.len().min(messageSize - 1);
+        while !text.is_char_boundary(len) {
+            len -= 1;
+        }
         std::ptr::copy_nonoverlapping(text.as_ptr() as *const c_char, message, len);
         *message.add(len) = 0;
     }
@@ -275,10 +283,40 @@ mod tests {
         assert!(out[1].nEvents > 0.0, "the 2-block set switches");
         // A bad set is named with its variable.
         sets[1].Tp = -1.0;
+        out.fill(SllBatchOutputs::default());
         let status = run(&sets, &mut out, &mut msg);
         let text = unsafe { CStr::from_ptr(msg.as_ptr()) }.to_string_lossy();
         assert_eq!(status, 3);
         assert!(text.starts_with("sllRunBatch: set 1: Tp = -1"), "{text}");
+        // Checked before any runs: no result written (set 0's stays as it was).
+        assert_eq!(out[0], SllBatchOutputs::default());
+        // A path that is not UTF-8 is named so; a message cut inside a
+        // character ends before it (the buffer holds UTF-8 text).
+        let mut call = |file: &CString, msg: &mut [c_char; 200], size: usize| {
+            msg.fill(1);
+            let (sets, out) = (sets.as_ptr(), out.as_mut_ptr());
+            let status = unsafe {
+                sllRunBatch(
+                    file.as_ptr(),
+                    9.81,
+                    1.0,
+                    0,
+                    sets,
+                    out,
+                    msg.as_mut_ptr(),
+                    size,
+                )
+            };
+            assert_eq!(status, 3);
+            let bytes = unsafe { CStr::from_ptr(msg.as_ptr()) }.to_bytes();
+            std::str::from_utf8(bytes).expect("UTF-8").to_string()
+        };
+        let latin1 = CString::new(b"caf\xe9.csv".to_vec()).unwrap();
+        assert!(call(&latin1, &mut msg, 200).contains("recordFile is not UTF-8 text"));
+        let missing = CString::new("/nonexistent/caf\u{e9}.csv").unwrap();
+        let whole = call(&missing, &mut msg, 200);
+        let at = whole.find('\u{e9}').expect("the path in the message");
+        assert_eq!(call(&missing, &mut msg, at + 2), whole[..at]);
         let status = unsafe {
             sllRunBatch(
                 std::ptr::null(),

@@ -576,7 +576,10 @@ mod tests {
         for bad in ["0,5O\n0.01,5\n0.02,-3\n", "a,b\nc,d\n0.0,X\n0.5,1\n0.7,2\n"] {
             let e = csv(bad, "v").unwrap_err();
             assert!(e.message.contains("expected two numbers"), "{bad:?}: {e:?}");
-            assert_eq!(e.line, bad.lines().position(|l| l.contains('0')).unwrap() + 1);
+            assert_eq!(
+                e.line,
+                bad.lines().position(|l| l.contains('0')).unwrap() + 1
+            );
         }
     }
 }
