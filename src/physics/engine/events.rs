@@ -53,6 +53,21 @@ impl Simulator {
         }
     }
 
+    /// Slipping interfaces whose relative velocity is against their direction.
+    fn reversed_slips(&self) -> u32 {
+        let mut reversed = 0;
+        for j in 1..self.sys.n + 1 {
+            let dv = self.v[j] - self.v[j - 1];
+            let against = match self.mode.contact[j] {
+                Contact::SlipForward => dv < 0.0,
+                Contact::SlipBackward => dv > 0.0,
+                _ => false,
+            };
+            reversed |= u32::from(against) << j;
+        }
+        reversed
+    }
+
     /// Sets one common velocity, the momentum average, on every group of
     /// bodies linked by stuck interfaces or by the interfaces in `joined`.
     pub(super) fn join_velocities(&mut self, joined: u32) {
@@ -204,8 +219,17 @@ impl Simulator {
         }
         // A slipping interface whose relative velocity reached zero gets its two sides joined at
         // their common momentum velocity; a stuck one whose force reached `mus N` must break.
-        if slip_zeroed != 0 {
+        // A join moves the bodies by as much as their relative velocity was: by rounding in the
+        // exact engine (its next stretch's guards see that at once), by its overshoot in the
+        // step-end baseline, where a slip next to it that this turns against its direction is
+        // joined too.
+        let mut joined = 0;
+        while slip_zeroed != joined {
             self.join_velocities(slip_zeroed);
+            joined = slip_zeroed;
+            if self.settings.method == Method::StepEnd {
+                slip_zeroed |= self.reversed_slips();
+            }
         }
         if slip_zeroed | must_break != 0 {
             self.resolve_mode(must_break, slip_zeroed);
