@@ -53,19 +53,21 @@ impl Simulator {
         }
     }
 
-    /// Slipping interfaces whose relative velocity is against their direction.
-    fn reversed_slips(&self) -> u32 {
-        let mut reversed = 0;
+    /// Interfaces whose relative velocity is against their contact: a stick
+    /// that moves, a slip the other way.
+    pub(super) fn against_contact(&self) -> u32 {
+        let mut against = 0;
         for j in 1..self.sys.n + 1 {
             let dv = self.v[j] - self.v[j - 1];
-            let against = match self.mode.contact[j] {
+            let wrong = match self.mode.contact[j] {
+                Contact::Stuck => dv != 0.0,
                 Contact::SlipForward => dv < 0.0,
                 Contact::SlipBackward => dv > 0.0,
-                _ => false,
+                Contact::Free => false,
             };
-            reversed |= u32::from(against) << j;
+            against |= u32::from(wrong) << j;
         }
-        reversed
+        against
     }
 
     /// Sets one common velocity, the momentum average, on every group of
@@ -228,7 +230,7 @@ impl Simulator {
             self.join_velocities(slip_zeroed);
             joined = slip_zeroed;
             if self.settings.method == Method::StepEnd {
-                slip_zeroed |= self.reversed_slips();
+                slip_zeroed |= self.against_contact();
             }
         }
         if slip_zeroed | must_break != 0 {

@@ -75,20 +75,14 @@ impl Simulator {
         if self.sys.prescribed() && (drift || self.e_viscous != 0.0) {
             return Err("the saved state moves a prescribed support relative to itself".into());
         }
-        for j in 1..=n {
-            let dv = self.v[j] - self.v[j - 1];
-            let ok = match self.mode.contact[j] {
-                Contact::Stuck => dv == 0.0,
-                Contact::SlipForward => dv >= 0.0,
-                Contact::SlipBackward => dv <= 0.0,
-                Contact::Free => true,
-            };
-            if !ok {
-                return Err(format!(
-                    "interface {j} is {:?} in the saved state but its relative velocity is {dv}",
-                    self.mode.contact[j]
-                ));
-            }
+        let against = self.against_contact();
+        if against != 0 {
+            let j = against.trailing_zeros() as usize;
+            return Err(format!(
+                "interface {j} is {:?} in the saved state but its relative velocity is {}",
+                self.mode.contact[j],
+                self.v[j] - self.v[j - 1]
+            ));
         }
         if !self.mode_is_consistent() {
             return Err("the saved stick/slip mode violates the contact law".into());
