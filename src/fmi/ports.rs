@@ -145,19 +145,11 @@ pub fn outputs_at_step_start(
     exc: &Excitation,
     mobility: f64,
 ) -> Result<Outputs, SimError> {
-    let mut o = with_jump_in_peak(at_step_start(sim, exc, mobility)?.outputs());
+    let mut o = at_step_start(sim, exc, mobility)?.outputs();
     let taken = sim.outputs();
     o.n_events = taken.n_events;
     o.n_ambiguous = taken.n_ambiguous;
     Ok(o)
-}
-
-/// The running peak of |apAbs| includes its value now: a jump of `Fext`
-/// (of `ag` on a prescribed support) makes `apAbs` jump at the
-/// communication point.
-fn with_jump_in_peak(mut o: Outputs) -> Outputs {
-    o.peak_ap_abs = o.peak_ap_abs.max(o.ap_abs.abs());
-    o
 }
 
 /// Right derivatives of a running peak `max |x|` where `x` has derivatives
@@ -201,7 +193,7 @@ pub fn derivatives(next: &Simulator, exc: &Excitation) -> [Outputs; 2] {
     let s = next.system();
     let mode = next.mode();
     let d = Dynamics::new(s, mode);
-    let o = with_jump_in_peak(next.outputs());
+    let o = next.outputs();
     let (k, c, n) = (s.k, s.c, s.n);
     let (ag, ag1) = (exc.ag, exc.ag_rate);
 

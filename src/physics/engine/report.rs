@@ -168,14 +168,18 @@ impl Simulator {
         let s = &self.sys;
         let d = &self.dynamics;
         let load0 = self.load0();
+        let ap_abs = d.accel(0, load0);
+        // The running peaks shown are never below the values shown, which
+        // come from other sums (rounding apart) or, for the acceleration,
+        // from inputs set since (a jump of Fext, or of a support's `ag`).
         let mut o = Outputs {
             t: self.t,
             up: self.u[0],
             vp: self.v[0],
-            ap_abs: d.accel(0, load0),
+            ap_abs,
             base_shear: s.k * self.u[0] + s.c * self.v[0],
-            peak_up: self.peak_u0,
-            peak_ap_abs: self.peak_a0,
+            peak_up: self.peak_u0.max(self.u[0].abs()),
+            peak_ap_abs: self.peak_a0.max(ap_abs.abs()),
             e_input: self.e_input,
             e_strain: 0.5 * s.k * self.u[0] * self.u[0],
             e_viscous: self.e_viscous,
@@ -198,7 +202,6 @@ impl Simulator {
                 d.force(j, &self.mode, load0)
             };
             o.stuck[b] = self.mode.is_stuck(j);
-            // Never below the slip shown (taken from other sums: they differ by rounding).
             o.peak_slip[b] = self.peak_slip[j].max(o.slip[b].abs());
             o.e_friction_of[b] = self.e_friction[j];
         }
