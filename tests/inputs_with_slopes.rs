@@ -882,3 +882,163 @@ fn a_jump_that_breaks_two_sticks_of_equal_kinetic_friction_keeps_both_broken() {
     println!("{broken_twice} of 16 cases with interface 1 sliding, 2 stuck again");
     assert!(broken_twice >= 4, "{broken_twice}");
 }
+
+#[test]
+fn sticks_that_reach_their_limit_together_break_at_the_lowest_wherever_the_ramp_is_cut() {
+    // Equal μs > μk at every interface: a stuck stack's stick forces all reach μs N at one
+    // instant (each is its blocks' mass times one acceleration), and rounding decided which guard
+    // fired first, so one call and the same ramp cut at the break ended in different motions
+    // (fuzzing, session 20: 46 of 7 519 cases). The rule (docs/model-and-numerics.md, rule 1):
+    // the lowest of the tied sticks breaks and the stack slides on it as one. Expected: that mode
+    // right after the break; one call's outputs equal those of the same ramp cut at the break
+    // (and a few ulps around it) to 1e-9 of the motion's scale; and the exact reference's.
+    let mut rng = Rng(0x0713_51e5);
+    for case in 0..24 {
+        let n = 2 + case % 7;
+        let support = [Support::Structure, Support::Prescribed][case % 2];
+        let mut p = Params {
+            n_blocks: n,
+            tp: rng.uniform(0.2, 1.0),
+            zeta: rng.uniform(0.0, 0.1),
+            support,
+            ..Params::default()
+        };
+        let (mus, ratio) = (rng.uniform(0.1, 0.5), rng.uniform(0.3, 0.9));
+        for j in 0..n {
+            (p.alpha[j], p.mus[j], p.muk[j]) = (rng.uniform(0.05, 2.0), mus, mus * ratio);
+        }
+        // A ramp of ag from rest that breaks the stack about a third of the way.
+        let rate = mus * 9.81 / rng.uniform(0.3, 0.6);
+        let ramp = |t_end: f64, t0: f64| InputPiece {
+            t_end,
+            ag: rate * t0,
+            ag_rate: rate,
+            fext: 0.0,
+            fext_rate: 0.0,
+        };
+        let t_end = 1.5;
+        let label = format!("case {case}: {p:?}, ag' {rate}");
+        let mut one = Simulator::new(&p, &Settings::default()).unwrap();
+        one.watch_switches();
+        one.advance(t_end, &excitation(&ramp(t_end, 0.0))).unwrap();
+        let t_break = one.first_switch();
+        assert!(
+            t_break > 0.0 && t_break < 1.0,
+            "{label}: break at {t_break}"
+        );
+        let mut after = Simulator::new(&p, &Settings::default()).unwrap();
+        after
+            .advance(t_break + 1e-3, &excitation(&ramp(t_end, 0.0)))
+            .unwrap();
+        let stuck = &after.outputs().stuck[..n];
+        assert!(
+            !stuck[0] && stuck[1..].iter().all(|&s| s),
+            "{label}: contacts after the break {stuck:?}"
+        );
+        let o = one.outputs();
+        let scale = o.peak_up.max(o.peak_slip[0]);
+        for ulps in [-2i64, -1, 0, 1, 2] {
+            let t_cut = f64::from_bits((t_break.to_bits() as i64 + ulps) as u64);
+            let pieces = [ramp(t_cut, 0.0), ramp(t_end, t_cut)];
+            let cut = drive(&p, &pieces, &label).outputs();
+            let mut worst = (cut.peak_up - o.peak_up).abs().max((cut.up - o.up).abs());
+            for j in 0..n {
+                worst = worst.max((cut.ub[j] - o.ub[j]).abs());
+                worst = worst.max((cut.peak_slip[j] - o.peak_slip[j]).abs());
+            }
+            assert!(
+                worst <= 1e-9 * scale,
+                "{label}: cut {ulps} ulps from the break differs from one call by {worst:.2e} m"
+            );
+        }
+        // The reference's final state and peaks (`compare` scales by the structure's peak, 0 on
+        // a prescribed support).
+        let exact = Exact::new(&p).run_pieces(0.0, &[ramp(t_end, 0.0)], 64);
+        let mut worst = (o.peak_up - exact.peak_u0)
+            .abs()
+            .max((o.up - exact.u[0]).abs());
+        for j in 0..n {
+            worst = worst.max((o.ub[j] - exact.u[j + 1]).abs());
+            worst = worst.max((o.peak_slip[j] - exact.peak_slip[j]).abs());
+        }
+        let scale = scale.max(o.ub[n - 1].abs());
+        assert!(
+            worst <= 1e-9 * scale,
+            "{label}: differs from the exact reference by {worst:.2e} m (scale {scale:.2e} m)"
+        );
+    }
+}
+
+#[test]
+fn equal_static_frictions_give_one_motion_whatever_the_calls_and_never_chatter() {
+    // Fresh seeded stacks with one μs at every interface and mixed μk (equal on about a third),
+    // on the structure and on a prescribed support, under broadband records at 0.005-0.02 s.
+    // Before the rule for ties (rule 1, docs/model-and-numerics.md), 231 of 1 000 such cases
+    // ended differently in one call and in one call per sample, and 72 muted a chattering
+    // contact. Expected: the two entry points agree to 1e-9 of the motion's scale, no contact
+    // is muted, no mode is inconsistent, and on every fourth case the exact reference agrees
+    // to 1e-9 of the scale too.
+    for seed in 0..60u64 {
+        let mut rng = Rng(0x0e9a_1000 + seed);
+        let n = 2 + (seed % 7) as usize;
+        let support = [Support::Structure, Support::Prescribed][(seed % 2) as usize];
+        let mut p = Params {
+            n_blocks: n,
+            tp: rng.uniform(0.2, 1.5),
+            zeta: rng.uniform(0.0, 0.1),
+            support,
+            ..Params::default()
+        };
+        let mus = rng.uniform(0.05, 0.4);
+        for j in 0..n {
+            p.alpha[j] = rng.uniform(0.05, 1.0);
+            p.mus[j] = mus;
+            p.muk[j] = mus
+                * if rng.next_f64() < 0.3 {
+                    1.0
+                } else {
+                    rng.uniform(0.4, 1.0)
+                };
+        }
+        let gm = broadband_record(&mut rng, 6.0, [0.005, 0.01, 0.02][(seed % 3) as usize]);
+        let label = format!("seed {seed}: {p:?}");
+        let mut one = Simulator::new(&p, &Settings::default()).unwrap();
+        ground::record::run(&mut one, &gm, 1.0).unwrap();
+        let mut each = Simulator::new(&p, &Settings::default()).unwrap();
+        for (t1, exc) in record_pieces(&gm) {
+            each.advance(t1, &exc).unwrap();
+        }
+        let (a, b) = (one.outputs(), each.outputs());
+        let scale = a.peak_up.max(a.peak_slip[0]).max(a.ub[n - 1].abs());
+        let differs = |x: &Outputs, peak_u0: f64, u0: f64, u: &[f64], slips: &[f64]| {
+            let mut worst = (x.peak_up - peak_u0).abs().max((x.up - u0).abs());
+            for j in 0..n {
+                worst = worst.max((x.ub[j] - u[j]).abs());
+                worst = worst.max((x.peak_slip[j] - slips[j]).abs());
+            }
+            worst
+        };
+        let d = differs(&b, a.peak_up, a.up, &a.ub[..n], &a.peak_slip[..n]);
+        assert!(
+            d <= 1e-9 * scale,
+            "{label}: the entry points differ by {d:.2e} m"
+        );
+        for s in [one.stats(), each.stats()] {
+            assert_eq!((s.muted, s.inconsistent), (0, 0), "{label}: {s:?}");
+        }
+        if seed % 4 == 0 {
+            let exact = Exact::new(&p).run(&gm, 16);
+            let d = differs(
+                &a,
+                exact.peak_u0,
+                exact.u[0],
+                &exact.u[1..],
+                &exact.peak_slip,
+            );
+            assert!(
+                d <= 1e-9 * scale,
+                "{label}: the reference differs by {d:.2e} m"
+            );
+        }
+    }
+}

@@ -758,6 +758,35 @@ impl ResolveRequest {
         let mut kept = bits(breaking & mode.stuck_mask());
         kept.any(|j| stuck_force_up(sys, mode, self.load0, j, &mut last).abs() >= limit(j))
     }
+
+    /// Rule 1 where sticks reach `mus N` together: of the sticks of `zero` whose force over `mus
+    /// N` equals a breaking one's to 1e-12, the lowest must break instead, and the others may
+    /// stay stuck: the stack above slides as one, as it does with μs = μk. Which guard fired
+    /// first is rounding; this makes one call and the same input cut in pieces agree. Such ties
+    /// come from equal μs (a stuck stack's forces over `mus N` are one acceleration over μs g):
+    /// only a breaking stick of [`System::shared_mus`] is looked at.
+    #[inline(always)]
+    fn with_tied_breaks_lowest(mut self, sys: &System) -> ResolveRequest {
+        if self.must_break & self.zero & sys.shared_mus != 0 {
+            self.must_break = self.tied_breaks_lowest(sys);
+        }
+        self
+    }
+
+    /// [`ResolveRequest::with_tied_breaks_lowest`]'s `must_break` (out of line: rare).
+    #[inline(never)]
+    fn tied_breaks_lowest(&self, sys: &System) -> u32 {
+        let sticks = self.zero & self.mode.stuck_mask() & !sys.free;
+        let (breaking, mut last) = (sticks & self.must_break, (0, 0.0));
+        let mut ratio = [f64::NAN; MAX_BODIES];
+        for j in bits(sticks) {
+            let f = stuck_force_up(sys, &self.mode, self.load0, j, &mut last);
+            ratio[j] = f.abs() / (sys.mus[j] * sys.normal[j]);
+        }
+        let tied = |b: usize| bits(sticks).find(|&j| (ratio[j] - ratio[b]).abs() <= 1e-12);
+        let lowest = bits(breaking).fold(0, |m, b| m | 1 << tied(b).unwrap_or(b));
+        self.must_break & !breaking | lowest
+    }
 }
 
 /// Outcome of a resolution.
@@ -793,6 +822,7 @@ pub struct Resolved {
 /// slip only on the two clusters it separates. Where no assignment is
 /// consistent, the enumeration of all 3^k picks the least violating one.
 pub fn resolve(sys: &System, req: &ResolveRequest) -> Resolved {
+    let req = &req.with_tied_breaks_lowest(sys);
     resolve_most_stuck(sys, req, 0..1)
         .or_else(|| resolve_cascade(sys, req))
         .or_else(|| resolve_most_stuck(sys, req, 1..3))
@@ -1274,6 +1304,7 @@ impl<'a> Walk<'a> {
 /// down: the selection rule's order written out, and the least violating
 /// assignment where none is consistent.
 pub fn resolve_by_enumeration(sys: &System, req: &ResolveRequest) -> Resolved {
+    let req = &req.with_tied_breaks_lowest(sys);
     let mut zero_list = [0usize; MAX_BODIES];
     let mut k = 0;
     for j in 1..=sys.n {

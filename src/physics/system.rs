@@ -33,6 +33,9 @@ pub struct System {
     pub free: u32,
     /// Interfaces (bit j) whose static and kinetic friction differ.
     unequal: u32,
+    /// Interfaces (bit j) whose static friction another interface has too (where sticks can
+    /// reach their limits together: `ResolveRequest`'s rule for ties).
+    pub shared_mus: u32,
     /// Circular frequency of the bare structure, sqrt(k / mp); 0 on a prescribed support.
     pub omega_p: f64,
     /// What block 1 rests on.
@@ -112,6 +115,9 @@ impl System {
             normal,
             free: (1..=n).fold(0, |m, j| m | u32::from(mus[j] == 0.0) << j),
             unequal: (1..=n).fold(0, |m, j| m | u32::from(mus[j] != muk[j]) << j),
+            shared_mus: (1..=n).fold(0, |m, j| {
+                m | u32::from((1..=n).any(|i| i != j && mus[i] == mus[j])) << j
+            }),
             mus,
             muk,
             omega_p,

@@ -136,9 +136,9 @@ def test_second_round_time_locations_and_work_through_fmpy(fmu, tmp_path):
     # bound within seconds, and the instance steps on.
     square = tmp_path / "square.csv"
     rows = []
-    # 300 s: its switches would spend about 1.5 times the bound (150 s spent
-    # it until session 20's fixes took some of the chatter's switches away).
-    for k in range(2 * 300_000):  # 300 s, each half period held, 1 us jumps
+    # 600 s: its switches would spend about 1.7 times the bound (150 s spent
+    # it until session 20's fixes, 300 s until session 21's rule for ties).
+    for k in range(2 * 600_000):  # 600 s, each half period held, 1 us jumps
         a = 5.0 if k % 2 == 0 else -5.0
         rows += [f"{k * 5e-4:.9f},{a}", f"{k * 5e-4 + 5e-4 - 1e-6:.9f},{a}"]
     square.write_text("\n".join(rows) + "\n")
@@ -159,9 +159,9 @@ m.start({{}}, 10.0)
 out["off_point"] = attempt(lambda: s.doStep(-1e-12, 0.0))
 out["last"] = s.getRealStatus(2)
 m.start({{"nBlocks": 8, "Tp": 1e-3, **{{f"{{k}}[{{j}}]": 0.3 for k in ("mus", "muk")
-                                         for j in range(1, 9)}}}}, 300.0, {str(square)!r})
+                                         for j in range(1, 9)}}}}, 600.0, {str(square)!r})
 started = time.perf_counter()
-out["chatter"] = attempt(lambda: s.doStep(0.0, 300.0))
+out["chatter"] = attempt(lambda: s.doStep(0.0, 600.0))
 out["chatter_seconds"] = time.perf_counter() - started
 out["chatter_message"] = m.messages[-1] if m.messages else ""
 out["after"] = attempt(lambda: s.doStep(0.0, 0.5))
