@@ -8,8 +8,9 @@
 //! It reaches into the engine through what the engine exposes `pub(crate)`
 //! for it: the fields `sys`, `t`, `u`, `v`, `dynamics`, `e_input`,
 //! `e_viscous`, `e_friction`, `peak_u0`, `peak_slip`, `peak_a0`, `stats`;
-//! the method `Simulator::fire_all_violated`; and the default's
-//! `move_bodies` and `upper_cluster_step`.
+//! the methods `Simulator::violated_now`, `join_velocities`,
+//! `against_contact` and `resolve_mode`; and the default's `move_bodies`
+//! and `upper_cluster_step`.
 
 use crate::physics::engine::{move_bodies, upper_cluster_step, Excitation, Simulator};
 use crate::physics::hermite;
@@ -120,7 +121,25 @@ impl Simulator {
         let x1 = rk.step(self.t, self.u[0], self.v[0], h);
         self.accept(&x1, h, exc, t_ref);
         self.t = t1;
-        self.fire_all_violated(exc, t_ref);
+        self.switch_at_end(exc, t_ref);
+    }
+
+    /// Every violated guard switches at the step's end, as in the default
+    /// (`Simulator::fire_violated`), but a join moves the bodies by the
+    /// step's overshoot: a slip next to it that this turns against its
+    /// direction is joined too.
+    fn switch_at_end(&mut self, exc: &Excitation, t_ref: f64) {
+        let all = self.sys.interfaces();
+        let (mut slip_zeroed, must_break) = self.violated_now(exc, t_ref, all, 0);
+        let mut joined = 0;
+        while slip_zeroed != joined {
+            self.join_velocities(slip_zeroed);
+            joined = slip_zeroed;
+            slip_zeroed |= self.against_contact();
+        }
+        if slip_zeroed | must_break != 0 {
+            self.resolve_mode(must_break, slip_zeroed);
+        }
     }
 
     /// Takes the step of length `h` that ends with the structure's cluster at

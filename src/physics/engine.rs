@@ -470,13 +470,6 @@ impl Simulator {
         self.peak_a0 = self.peak_a0.max(self.dynamics.accel(0, self.load0()).abs());
     }
 
-    /// For the step-end baseline (`crate::baselines::step_end`) at a
-    /// step's end: every violated guard switches there.
-    pub(crate) fn fire_all_violated(&mut self, exc: &Excitation, t_ref: f64) {
-        let all = self.sys.interfaces();
-        self.fire_violated(exc, t_ref, all, 0);
-    }
-
     /// The structure cluster's load now ([`Dynamics::load0`]).
     fn load0(&self) -> f64 {
         Dynamics::load0(&self.sys, self.u[0], self.v[0], self.ag_now, self.fext_now)

@@ -21,7 +21,7 @@ impl Simulator {
     /// zero. Any other slip at zero began at this instant and broke here: a second resolution at
     /// the same instant (a contact that fires at once) keeps it broken unless nothing else is
     /// consistent (rule 1), rather than preferring it stuck.
-    pub(super) fn resolve_mode(&mut self, must_break: u32, settled: u32) {
+    pub(crate) fn resolve_mode(&mut self, must_break: u32, settled: u32) {
         let (zero, was_stuck) = (self.zero_mask(), self.mode.stuck_mask());
         let req = ResolveRequest {
             mode: self.mode,
@@ -55,7 +55,7 @@ impl Simulator {
 
     /// Interfaces whose relative velocity is against their contact: a stick
     /// that moves, a slip the other way.
-    pub(super) fn against_contact(&self) -> u32 {
+    pub(crate) fn against_contact(&self) -> u32 {
         let mut against = 0;
         for j in 1..self.sys.n + 1 {
             let dv = self.v[j] - self.v[j - 1];
@@ -72,7 +72,7 @@ impl Simulator {
 
     /// Sets one common velocity, the momentum average, on every group of
     /// bodies linked by stuck interfaces or by the interfaces in `joined`.
-    pub(super) fn join_velocities(&mut self, joined: u32) {
+    pub(crate) fn join_velocities(&mut self, joined: u32) {
         // The groups' bounds: the clusters' ends less the joined interfaces.
         let bounds = self.mode.cluster_ends() & !joined;
         let mut rest = joined & self.sys.interfaces();
@@ -193,7 +193,10 @@ impl Simulator {
     }
 
     /// Fires the guards in `forced` and every guard among `candidates`
-    /// that is zero or negative now.
+    /// that is zero or negative now. A slipping interface whose relative velocity reached zero
+    /// gets its two sides joined at their common momentum velocity; a stuck one whose force
+    /// reached `mus N` must break. (A join moves the bodies by as much as their relative velocity
+    /// was: by rounding here, and the next stretch's guards see that at once.)
     pub(super) fn fire_violated(
         &mut self,
         exc: &Excitation,
@@ -201,6 +204,23 @@ impl Simulator {
         candidates: u32,
         forced: u32,
     ) {
+        let (slip_zeroed, must_break) = self.violated_now(exc, t_ref, candidates, forced);
+        if slip_zeroed | must_break != 0 {
+            self.join_velocities(slip_zeroed);
+            self.resolve_mode(must_break, slip_zeroed);
+        }
+    }
+
+    /// The guards in `forced` and those among `candidates` that are zero or negative now, with
+    /// the inputs taken at this instant: the slips that reached zero, the sticks that must break.
+    #[inline(always)]
+    pub(crate) fn violated_now(
+        &mut self,
+        exc: &Excitation,
+        t_ref: f64,
+        candidates: u32,
+        forced: u32,
+    ) -> (u32, u32) {
         self.take_inputs_now(exc, t_ref);
         let load0 = self.load0();
         let (mut slip_zeroed, mut must_break) = (0, 0);
@@ -219,23 +239,7 @@ impl Simulator {
                 }
             }
         }
-        // A slipping interface whose relative velocity reached zero gets its two sides joined at
-        // their common momentum velocity; a stuck one whose force reached `mus N` must break.
-        // A join moves the bodies by as much as their relative velocity was: by rounding in the
-        // exact engine (its next stretch's guards see that at once), by its overshoot in the
-        // step-end baseline, where a slip next to it that this turns against its direction is
-        // joined too.
-        let mut joined = 0;
-        while slip_zeroed != joined {
-            self.join_velocities(slip_zeroed);
-            joined = slip_zeroed;
-            if self.settings.method == Method::StepEnd {
-                slip_zeroed |= self.against_contact();
-            }
-        }
-        if slip_zeroed | must_break != 0 {
-            self.resolve_mode(must_break, slip_zeroed);
-        }
+        (slip_zeroed, must_break)
     }
 
     /// Fires the located guard `j` whatever its sign after rounding, and
