@@ -764,7 +764,7 @@ impl ResolveRequest {
     /// stay stuck: the stack above slides as one, as it does with μs = μk. Which guard fired
     /// first is rounding; this makes one call and the same input cut in pieces agree. Such ties
     /// come from equal μs (a stuck stack's forces over `mus N` are one acceleration over μs g):
-    /// only a breaking stick of [`System::shared_mus`] is looked at.
+    /// they are looked for only where a breaking stick is one of [`System::shared_mus`].
     #[inline(always)]
     fn with_tied_breaks_lowest(mut self, sys: &System) -> ResolveRequest {
         if self.must_break & self.zero & sys.shared_mus != 0 {

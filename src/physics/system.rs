@@ -33,8 +33,9 @@ pub struct System {
     pub free: u32,
     /// Interfaces (bit j) whose static and kinetic friction differ.
     unequal: u32,
-    /// Interfaces (bit j) whose static friction another interface has too (where sticks can
-    /// reach their limits together: `ResolveRequest`'s rule for ties).
+    /// Interfaces (bit j) whose static friction another interface has too, to 1e-9 (where
+    /// sticks can reach their limits together: `ResolveRequest`'s rule for ties; `0.1 + 0.2` and
+    /// `0.3` are one μs there).
     pub shared_mus: u32,
     /// Circular frequency of the bare structure, sqrt(k / mp); 0 on a prescribed support.
     pub omega_p: f64,
@@ -116,7 +117,8 @@ impl System {
             free: (1..=n).fold(0, |m, j| m | u32::from(mus[j] == 0.0) << j),
             unequal: (1..=n).fold(0, |m, j| m | u32::from(mus[j] != muk[j]) << j),
             shared_mus: (1..=n).fold(0, |m, j| {
-                m | u32::from((1..=n).any(|i| i != j && mus[i] == mus[j])) << j
+                let near = |i: usize| (mus[i] - mus[j]).abs() <= 1e-9 * mus[i].max(mus[j]);
+                m | u32::from((1..=n).any(|i| i != j && near(i))) << j
             }),
             mus,
             muk,
