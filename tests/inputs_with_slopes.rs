@@ -883,6 +883,23 @@ fn a_jump_that_breaks_two_sticks_of_equal_kinetic_friction_keeps_both_broken() {
     assert!(broken_twice >= 4, "{broken_twice}");
 }
 
+/// The structure's peak, its and the blocks' final displacements, and the slip peaks of `o`
+/// (`n` blocks), as [`gap`] compares them.
+fn motion(o: &Outputs, n: usize) -> (f64, Vec<f64>, Vec<f64>) {
+    let u = std::iter::once(o.up).chain(o.ub[..n].iter().copied());
+    (o.peak_up, u.collect(), o.peak_slip[..n].to_vec())
+}
+
+/// Largest difference (m) between the motion of `x` and another: its structure's peak
+/// `peak_u0`, final displacements `u` (the structure first) and slip peaks `slips`.
+fn gap(x: &Outputs, peak_u0: f64, u: &[f64], slips: &[f64]) -> f64 {
+    let (_, ux, sx) = motion(x, slips.len());
+    let pairs = ux.iter().zip(u).chain(sx.iter().zip(slips));
+    pairs.fold((x.peak_up - peak_u0).abs(), |w, (a, b)| {
+        w.max((a - b).abs())
+    })
+}
+
 /// A ramp of `ag` from rest at `rate`, cut at `t0` (its value there) and ending at `t_end`.
 fn ag_ramp(rate: f64, t0: f64, t_end: f64) -> InputPiece {
     InputPiece {
@@ -920,32 +937,19 @@ fn check_tied_break(p: &Params, rate: f64, label: &str) {
     );
     let o = one.outputs();
     let scale = o.peak_up.max(o.peak_slip[0]).max(o.ub[n - 1].abs());
-    let differs = |x: &Outputs, peak_u0: f64, u0: f64, u: &[f64], slips: &[f64]| {
-        let mut worst = (x.peak_up - peak_u0).abs().max((x.up - u0).abs());
-        for j in 0..n {
-            worst = worst.max((x.ub[j] - u[j]).abs());
-            worst = worst.max((x.peak_slip[j] - slips[j]).abs());
-        }
-        worst
-    };
+    let (peak_u0, u, slips) = motion(&o, n);
     for ulps in [-2i64, -1, 0, 1, 2] {
         let t_cut = f64::from_bits((t_break.to_bits() as i64 + ulps) as u64);
         let pieces = [ag_ramp(rate, 0.0, t_cut), ag_ramp(rate, t_cut, t_end)];
         let cut = drive(p, &pieces, label).outputs();
-        let d = differs(&cut, o.peak_up, o.up, &o.ub[..n], &o.peak_slip[..n]);
+        let d = gap(&cut, peak_u0, &u, &slips);
         assert!(
             d <= 1e-9 * scale,
             "{label}: cut {ulps} ulps from the break differs from one call by {d:.2e} m"
         );
     }
     let exact = Exact::new(p).run_pieces(0.0, &[ag_ramp(rate, 0.0, t_end)], 64);
-    let d = differs(
-        &o,
-        exact.peak_u0,
-        exact.u[0],
-        &exact.u[1..],
-        &exact.peak_slip,
-    );
+    let d = gap(&o, exact.peak_u0, &exact.u, &exact.peak_slip);
     assert!(
         d <= 1e-9 * scale,
         "{label}: differs from the exact reference by {d:.2e} m (scale {scale:.2e} m)"
@@ -967,13 +971,7 @@ fn sticks_that_reach_their_limit_together_break_at_the_lowest_wherever_the_ramp_
     for case in 0..32 {
         let n = 2 + case % 7;
         let support = [Support::Structure, Support::Prescribed][case % 2];
-        let mut p = Params {
-            n_blocks: n,
-            tp: rng.uniform(0.2, 1.0),
-            zeta: rng.uniform(0.0, 0.1),
-            support,
-            ..Params::default()
-        };
+        let mut p = random_stack(&mut rng, n, support);
         let (mus, ratio) = (rng.uniform(0.1, 0.5), rng.uniform(0.3, 0.9));
         for j in 0..n {
             // Half the cases: each μs up to 3 ulps off.
@@ -983,7 +981,7 @@ fn sticks_that_reach_their_limit_together_break_at_the_lowest_wherever_the_ramp_
                 (rng.next_f64() * 7.0) as i64 - 3
             };
             let mus_j = f64::from_bits((mus.to_bits() as i64 + ulps) as u64);
-            (p.alpha[j], p.mus[j], p.muk[j]) = (rng.uniform(0.05, 2.0), mus_j, mus * ratio);
+            (p.mus[j], p.muk[j]) = (mus_j, mus * ratio);
         }
         // A ramp of ag from rest that breaks the stack about a third of the way.
         let rate = mus * 9.81 / rng.uniform(0.3, 0.6);
@@ -1035,16 +1033,9 @@ fn equal_static_frictions_give_one_motion_whatever_the_calls_and_never_chatter()
         let mut rng = Rng(0x0e9a_1000 + seed);
         let n = 2 + (seed % 7) as usize;
         let support = [Support::Structure, Support::Prescribed][(seed % 2) as usize];
-        let mut p = Params {
-            n_blocks: n,
-            tp: rng.uniform(0.2, 1.5),
-            zeta: rng.uniform(0.0, 0.1),
-            support,
-            ..Params::default()
-        };
+        let mut p = random_stack(&mut rng, n, support);
         let mus = rng.uniform(0.05, 0.4);
         for j in 0..n {
-            p.alpha[j] = rng.uniform(0.05, 1.0);
             p.mus[j] = mus;
             p.muk[j] = mus
                 * if rng.next_f64() < 0.3 {
@@ -1063,15 +1054,8 @@ fn equal_static_frictions_give_one_motion_whatever_the_calls_and_never_chatter()
         }
         let (a, b) = (one.outputs(), each.outputs());
         let scale = a.peak_up.max(a.peak_slip[0]).max(a.ub[n - 1].abs());
-        let differs = |x: &Outputs, peak_u0: f64, u0: f64, u: &[f64], slips: &[f64]| {
-            let mut worst = (x.peak_up - peak_u0).abs().max((x.up - u0).abs());
-            for j in 0..n {
-                worst = worst.max((x.ub[j] - u[j]).abs());
-                worst = worst.max((x.peak_slip[j] - slips[j]).abs());
-            }
-            worst
-        };
-        let d = differs(&b, a.peak_up, a.up, &a.ub[..n], &a.peak_slip[..n]);
+        let (peak_u0, u, slips) = motion(&a, n);
+        let d = gap(&b, peak_u0, &u, &slips);
         assert!(
             d <= 1e-9 * scale,
             "{label}: the entry points differ by {d:.2e} m"
@@ -1081,13 +1065,7 @@ fn equal_static_frictions_give_one_motion_whatever_the_calls_and_never_chatter()
         }
         if seed % 4 == 0 {
             let exact = Exact::new(&p).run(&gm, 16);
-            let d = differs(
-                &a,
-                exact.peak_u0,
-                exact.u[0],
-                &exact.u[1..],
-                &exact.peak_slip,
-            );
+            let d = gap(&a, exact.peak_u0, &exact.u, &exact.peak_slip);
             assert!(
                 d <= 1e-9 * scale,
                 "{label}: the reference differs by {d:.2e} m"
