@@ -140,9 +140,10 @@ fn compare(sim: &Simulator, exact: &ExactResult, label: &str) -> f64 {
 #[test]
 fn friction_work_never_falls_nor_goes_negative_even_where_frictions_tie() {
     // Equal frictions on neighbouring interfaces make switches that cross
-    // at the same instant up to rounding (the motion is then not unique,
-    // so no reference is compared): a stretch that ends where a slip stops
-    // computed its slip a few ulps backwards, and Efriction fell by up to
+    // at the same instant up to rounding (no reference is compared here;
+    // the tie tests below do, since rule 1 decides ties): a stretch that
+    // ends where a slip stops computed its slip a few ulps backwards, and
+    // Efriction fell by up to
     // 1.5e-15 J or went negative (-1e-21 to -1e-16 J) in a few per cent of
     // such scenes before the work was booked non-negative (found by a fuzz
     // of 12 000 scenes; here case 13 fell). Expected: every interface's

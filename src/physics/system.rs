@@ -36,7 +36,7 @@ pub struct System {
     /// Interfaces (bit j) whose static friction another interface has too, to 1e-9 (where
     /// sticks can reach their limits together: `ResolveRequest`'s rule for ties; `0.1 + 0.2` and
     /// `0.3` are one μs there).
-    pub shared_mus: u32,
+    pub(crate) shared_mus: u32,
     /// Circular frequency of the bare structure, sqrt(k / mp); 0 on a prescribed support.
     pub omega_p: f64,
     /// What block 1 rests on.
